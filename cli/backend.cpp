@@ -1,0 +1,50 @@
+#include "backend.hpp"
+
+#include <cstdio>
+
+#include "chladni/core/error.hpp"
+#include "chladni/gpu/context.hpp"
+#include "chladni/runtime/cpu_filterbank.hpp"
+#include "chladni/runtime/gpu_filterbank.hpp"
+
+namespace chladni::cli {
+namespace {
+
+runtime::CpuIsa parse_isa(const std::string& s) {
+  if (s == "auto") return runtime::CpuIsa::Auto;
+  if (s == "scalar") return runtime::CpuIsa::Scalar;
+  if (s == "avx2") return runtime::CpuIsa::Avx2;
+  if (s == "avx512") return runtime::CpuIsa::Avx512;
+  throw InputError("--isa: unknown instruction set '" + s + "' (auto, scalar, avx2, avx512)");
+}
+
+}  // namespace
+
+std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& r) {
+  if (r.backend == "gpu") {
+    try {
+      auto ctx = std::make_shared<gpu::Context>();
+      runtime::GpuFilterbankOptions o;
+      o.capacity = r.capacity;
+      o.channels = r.channels;
+      o.max_frames = r.max_frames;
+      return std::make_unique<runtime::GpuFilterbank>(ctx, o);
+    } catch (const gpu::NoDeviceError& e) {
+      std::fprintf(stderr, "warning: %s; using the CPU filterbank instead\n", e.what());
+    }
+  } else if (r.backend != "cpu") {
+    throw InputError("--backend: unknown backend '" + r.backend + "' (cpu, gpu)");
+  }
+  runtime::CpuFilterbankOptions o;
+  o.capacity = r.capacity;
+  o.channels = r.channels;
+  o.threads = r.threads;
+  o.isa = parse_isa(r.isa);
+  o.max_frames = r.max_frames;
+  if (!runtime::CpuFilterbank::supports(o.isa)) {
+    throw InputError("--isa " + r.isa + ": not supported by this processor");
+  }
+  return std::make_unique<runtime::CpuFilterbank>(o);
+}
+
+}  // namespace chladni::cli

@@ -1,0 +1,22 @@
+#pragma once
+// Filterbank construction for the CLI: "cpu" or "gpu"; a missing Vulkan device turns "gpu" into
+// the CPU path with one warning on stderr.
+#include <memory>
+#include <string>
+
+#include "chladni/runtime/filterbank.hpp"
+
+namespace chladni::cli {
+
+struct BackendRequest {
+  std::string backend = "cpu";  ///< "cpu" | "gpu"
+  uint32_t capacity = 1u << 20;
+  int channels = 1;
+  int threads = 0;
+  std::string isa = "auto";  ///< cpu only: auto | scalar | avx2 | avx512
+  uint32_t max_frames = 4096;
+};
+
+std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& request);
+
+}  // namespace chladni::cli

@@ -1,0 +1,152 @@
+// chladni render SCENE.json -o OUT.wav: plays a scene's impacts through the modal filterbank.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+
+#include "backend.hpp"
+#include "chladni/core/audio_file.hpp"
+#include "chladni/core/error.hpp"
+#include "chladni/core/scene.hpp"
+#include "chladni/precompute/analytic_bar.hpp"
+#include "chladni/runtime/render.hpp"
+#include "commands.hpp"
+
+namespace chladni::cli {
+namespace {
+
+struct RenderArgs {
+  std::string scene, output, backend = "cpu", isa = "auto", format = "float";
+  int sample_rate = 0, threads = 0;
+  uint32_t block = 256, max_modes = 0;
+  double normalize_db = NAN, retire_db = -100;
+  bool quiet = false;
+};
+
+// Builds each object's modal description; models must outlive the ObjectModes that point at them.
+void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>>& models,
+                     std::vector<runtime::ObjectModes>& objects, bool quiet) {
+  for (const SceneObject& obj : scene.objects) {
+    switch (obj.source) {
+      case SceneObject::Source::Modes:
+        objects.push_back(runtime::object_modes(obj.modes));
+        if (!quiet) std::printf("  %-12s %zu inline modes\n", obj.name.c_str(), obj.modes.size());
+        break;
+      case SceneObject::Source::Bar: {
+        auto model = std::make_unique<ModalModel>(precompute::analytic_bar(obj.bar));
+        model->name = obj.name;
+        const ModeSelection sel =
+            apply_damping(*model, obj.bar.damping, 20.0, obj.bar.max_frequency, scene.sample_rate);
+        keep_modes(*model, sel.kept);
+        if (model->mode_count() == 0) {
+          throw InputError(obj.json_path + ".bar: no mode lies in the audible band");
+        }
+        if (!quiet) {
+          std::printf("  %-12s analytic bar %.3f x %.3f x %.3f m, %s: %zu modes (%zu overdamped, "
+                      "%zu out of band); lowest",
+                      obj.name.c_str(), obj.bar.length, obj.bar.width, obj.bar.thickness,
+                      obj.bar.damping.to_string().c_str(), model->mode_count(), sel.overdamped,
+                      sel.below_band + sel.above_band);
+          for (std::size_t i = 0; i < std::min<std::size_t>(5, model->mode_count()); ++i) {
+            std::printf(" %.1f", model->damped_omega(i) / (2 * std::numbers::pi));
+          }
+          std::printf(" Hz\n");
+        }
+        models.push_back(std::move(model));
+        objects.push_back(runtime::object_modes(*models.back()));
+        break;
+      }
+      case SceneObject::Source::Soundbank:
+        throw InputError(obj.json_path + ".soundbank: cannot load " + obj.soundbank +
+                         ": soundbank files come with the precompute pipeline, which this build "
+                         "does not have yet; use 'modes' or 'bar' objects");
+    }
+  }
+}
+
+void run_render(const RenderArgs& a) {
+  Scene scene = load_scene(a.scene);
+  if (a.sample_rate) {
+    if (a.sample_rate < 8000 || a.sample_rate > 384000) {
+      throw InputError("--sample-rate must lie in [8000, 384000]");
+    }
+    scene.sample_rate = a.sample_rate;
+  }
+  if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
+  SampleFormat format = SampleFormat::Float32;
+  if (a.format == "pcm24") format = SampleFormat::Pcm24;
+  else if (a.format == "pcm16") format = SampleFormat::Pcm16;
+  else if (a.format != "float") throw InputError("--format must be float, pcm24 or pcm16");
+
+  if (!a.quiet) std::printf("scene %s: %zu objects, %zu events\n", a.scene.c_str(),
+                            scene.objects.size(), scene.events.size());
+  std::vector<std::unique_ptr<ModalModel>> models;
+  std::vector<runtime::ObjectModes> objects;
+  resolve_objects(scene, models, objects, a.quiet);
+
+  std::size_t total_modes = 0;
+  for (const auto& o : objects) total_modes += o.modes.size();
+  BackendRequest req;
+  req.backend = a.backend;
+  req.channels = scene.channels;
+  req.threads = a.threads;
+  req.isa = a.isa;
+  req.capacity = a.max_modes ? a.max_modes
+                             : static_cast<uint32_t>(std::clamp<std::size_t>(total_modes, 1024, 1u << 20));
+  req.max_frames = std::max<uint32_t>(a.block, 256);
+  auto fb = make_filterbank(req);
+
+  runtime::RenderOptions ro;
+  ro.block = a.block;
+  ro.synth.retire_db = a.retire_db;
+  ro.synth.max_modes = req.capacity;
+  runtime::RenderReport rep;
+  AudioBuffer audio = runtime::render_scene(scene, objects, *fb, ro, &rep);
+
+  double gain = 1.0;
+  if (!std::isnan(a.normalize_db) && rep.peak > 0) gain = std::pow(10.0, a.normalize_db / 20.0) / rep.peak;
+  if (gain != 1.0) for (float& x : audio.samples) x = static_cast<float>(x * gain);
+  write_wav(a.output, audio, format);
+
+  const double secs = double(rep.frames) / scene.sample_rate;
+  if (!a.quiet) {
+    std::printf("backend %s, block %u, %d Hz, %d channel%s\n", fb->name().c_str(), a.block,
+                scene.sample_rate, scene.channels, scene.channels == 2 ? "s" : "");
+    std::printf("rendered %.3f s in %.3f s (%.1fx real time); peak %.4g%s; modes: %u resident at most, "
+                "%llu retired, %llu stolen\n",
+                secs, rep.seconds, rep.seconds > 0 ? secs / rep.seconds : 0.0, rep.peak,
+                std::isnan(a.normalize_db) ? " Pa" : " Pa before normalization",
+                rep.max_active_modes, static_cast<unsigned long long>(rep.stats.retired),
+                static_cast<unsigned long long>(rep.stats.stolen));
+    std::printf("wrote %s\n", a.output.c_str());
+  }
+  if (std::isnan(a.normalize_db) && rep.peak > 1.0 && format != SampleFormat::Float32) {
+    std::fprintf(stderr, "warning: peak %.3g exceeds full scale and was clipped; use --normalize\n",
+                 rep.peak);
+  }
+}
+
+}  // namespace
+
+void add_render(CLI::App& app) {
+  auto a = std::make_shared<RenderArgs>();
+  CLI::App* cmd = app.add_subcommand("render", "Render a scene (JSON) to a WAV file");
+  cmd->add_option("scene", a->scene, "Scene file (docs/scene-format.md)")->required();
+  cmd->add_option("-o,--output", a->output, "Output WAV file")->required();
+  cmd->add_option("--backend", a->backend, "Filterbank: cpu or gpu (gpu falls back to cpu)")
+      ->capture_default_str();
+  cmd->add_option("--sample-rate", a->sample_rate, "Override the scene's sample rate (Hz)");
+  cmd->add_option("--block", a->block, "Frames per filterbank call")->capture_default_str();
+  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")->capture_default_str();
+  cmd->add_option("--isa", a->isa, "CPU instruction set: auto, scalar, avx2, avx512")
+      ->capture_default_str();
+  cmd->add_option("--max-modes", a->max_modes, "Resident mode budget (0: all modes of the scene)");
+  cmd->add_option("--retire-db", a->retire_db, "Retire modes this far below their peak (dB)")
+      ->capture_default_str();
+  cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)");
+  cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")->capture_default_str();
+  cmd->add_flag("-q,--quiet", a->quiet, "Print nothing but errors");
+  cmd->callback([a] { run_render(*a); });
+}
+
+}  // namespace chladni::cli

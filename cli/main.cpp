@@ -1,0 +1,34 @@
+// chladni: command-line front end. Exit codes (DESIGN.md): 0 success, 2 bad input, 1 failure.
+#include <cstdio>
+#include <exception>
+
+#include "chladni/core/error.hpp"
+#include "chladni/gpu/context.hpp"
+#include "commands.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"Chladni: GPU-accelerated modal sound synthesis"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "chladni 0.1.0");
+  chladni::cli::add_render(app);
+  chladni::cli::add_bench(app);
+  chladni::cli::add_devices(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::Success& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    app.exit(e);
+    return 2;
+  } catch (const chladni::InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 2;
+  } catch (const chladni::gpu::Error& e) {
+    std::fprintf(stderr, "error: Vulkan: %s\n", e.what());
+    return 1;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,21 @@
+#pragma once
+// Errors are exceptions inside the library; the CLI maps them to exit codes (DESIGN.md):
+// InputError -> 2 (the user's data or arguments are wrong), anything else -> 1.
+#include <stdexcept>
+#include <string>
+
+namespace chladni {
+
+/// Bad input: a malformed file, an invalid parameter, a NaN. The message names what and where.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A failure of ours or of the system (driver, out of memory) rather than of the input.
+class InternalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+}  // namespace chladni

@@ -1,0 +1,75 @@
+#pragma once
+// The scene a render plays: objects, a listener and timed events (docs/scene-format.md).
+// Parsing validates everything and names the JSON path of the first problem.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json_fwd.hpp>
+
+#include "chladni/core/damping.hpp"
+#include "chladni/core/modal_model.hpp"
+
+namespace chladni {
+
+struct Listener {
+  Vec3 position{0, 0, 0};
+  Vec3 forward{0, 1, 0};
+  Vec3 up{0, 0, 1};
+};
+
+struct InlineMode {
+  double frequency = 0;  ///< Hz (damped)
+  double decay = 0;      ///< 1/s
+  double amplitude = 0;  ///< Pa at 1 m per N*s of impulse
+};
+
+/// A free-free rectangular bar described analytically (Euler-Bernoulli bending + axial modes).
+struct BarSpec {
+  double length = 0.3, width = 0.03, thickness = 0.01;  ///< m (x, y, z)
+  double youngs_modulus = 200e9, poisson_ratio = 0.29, density = 7850;
+  DampingModel damping{DampingModel::Kind::Rayleigh, {2.0, 2e-9}};
+  double max_frequency = 20000;  ///< Hz
+};
+
+struct SceneObject {
+  enum class Source { Modes, Bar, Soundbank };
+  std::string name;
+  std::string json_path;  ///< "$.objects[i]", for messages
+  Source source = Source::Modes;
+  std::vector<InlineMode> modes;
+  BarSpec bar;
+  std::string soundbank;  ///< path resolved against the scene file's folder
+  Vec3 position{0, 0, 0};
+  double gain = 1.0;
+};
+
+struct ImpactEvent {
+  std::string json_path;
+  double time = 0;           ///< s
+  std::size_t object = 0;    ///< index into Scene::objects
+  double impulse = 0;        ///< N*s
+  Vec3 direction{0, 0, -1};  ///< unit, object frame
+  std::optional<Vec3> point;
+  std::optional<std::size_t> vertex;
+  double contact_time = 0;  ///< s; 0 = ideal impulse, else half-sine force of this duration
+};
+
+struct Scene {
+  int sample_rate = 48000;
+  int channels = 2;
+  std::optional<double> duration;  ///< s; default: last event plus the longest ring-out
+  double gain = 1.0;
+  Listener listener;
+  std::vector<SceneObject> objects;
+  std::vector<ImpactEvent> events;  ///< sorted by time
+};
+
+/// Parses a scene from JSON; `base_dir` resolves relative file names. Throws InputError whose
+/// message starts with the JSON path of the problem ("$.events[2].time: must be >= 0").
+Scene parse_scene(const nlohmann::json& j, const std::string& base_dir);
+
+/// Reads and parses a scene file; syntax errors name the file, line and column.
+Scene load_scene(const std::string& path);
+
+}  // namespace chladni

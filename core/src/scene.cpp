@@ -1,0 +1,270 @@
+#include "chladni/core/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "chladni/core/error.hpp"
+
+namespace chladni {
+namespace {
+
+using nlohmann::json;
+
+[[noreturn]] void fail(const std::string& path, const std::string& what) {
+  throw InputError(path + ": " + what);
+}
+
+// A JSON object being read, remembering its path and which keys were consumed so that typos
+// ("impluse") are reported instead of silently ignored.
+class Obj {
+ public:
+  Obj(const json& j, std::string path) : j_(j), path_(std::move(path)) {
+    if (!j_.is_object()) fail(path_, std::string("expected an object, got ") + j_.type_name());
+  }
+  const std::string& path() const { return path_; }
+  std::string at(const std::string& key) const { return path_ + "." + key; }
+  bool has(const std::string& key) const { return j_.contains(key); }
+
+  const json& get(const std::string& key) {
+    if (!j_.contains(key)) fail(path_, "missing required field '" + key + "'");
+    used_.push_back(key);
+    return j_.at(key);
+  }
+  double number(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_number()) fail(at(key), std::string("expected a number, got ") + v.type_name());
+    const double x = v.get<double>();
+    if (!std::isfinite(x)) fail(at(key), "must be finite");
+    return x;
+  }
+  double number(const std::string& key, double fallback) {
+    return has(key) ? number(key) : fallback;
+  }
+  double positive(const std::string& key, double fallback) {
+    const double x = number(key, fallback);
+    if (!(x > 0)) fail(at(key), "must be > 0");
+    return x;
+  }
+  double non_negative(const std::string& key, double fallback) {
+    const double x = number(key, fallback);
+    if (x < 0) fail(at(key), "must be >= 0");
+    return x;
+  }
+  long integer(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_number_integer()) fail(at(key), "expected an integer");
+    return v.get<long>();
+  }
+  std::string string(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_string()) fail(at(key), std::string("expected a string, got ") + v.type_name());
+    return v.get<std::string>();
+  }
+  Vec3 vec3(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_array() || v.size() != 3) fail(at(key), "expected an array of 3 numbers");
+    Vec3 out{};
+    for (int k = 0; k < 3; ++k) {
+      if (!v[k].is_number()) fail(at(key) + "[" + std::to_string(k) + "]", "expected a number");
+      out[k] = v[k].get<double>();
+      if (!std::isfinite(out[k])) fail(at(key) + "[" + std::to_string(k) + "]", "must be finite");
+    }
+    return out;
+  }
+  Vec3 unit(const std::string& key) {
+    Vec3 v = vec3(key);
+    const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    if (!(n > 1e-12)) fail(at(key), "must be a non-zero vector");
+    return {v[0] / n, v[1] / n, v[2] / n};
+  }
+  const json& array(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_array()) fail(at(key), std::string("expected an array, got ") + v.type_name());
+    return v;
+  }
+  // Every key must have been read: anything else is a typo or an unsupported field.
+  void done() const {
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      if (std::find(used_.begin(), used_.end(), it.key()) == used_.end()) {
+        fail(path_, "unknown field '" + it.key() + "'");
+      }
+    }
+  }
+
+ private:
+  const json& j_;
+  std::string path_;
+  std::vector<std::string> used_;
+};
+
+std::string index_path(const std::string& base, std::size_t i) {
+  return base + "[" + std::to_string(i) + "]";
+}
+
+void parse_bar(Obj o, BarSpec& bar) {
+  bar.length = o.positive("length", bar.length);
+  bar.width = o.positive("width", bar.width);
+  bar.thickness = o.positive("thickness", bar.thickness);
+  bar.youngs_modulus = o.positive("youngs_modulus", bar.youngs_modulus);
+  bar.poisson_ratio = o.number("poisson_ratio", bar.poisson_ratio);
+  if (!(bar.poisson_ratio > -1.0 && bar.poisson_ratio < 0.5)) {
+    fail(o.at("poisson_ratio"), "must lie in (-1, 0.5)");
+  }
+  bar.density = o.positive("density", bar.density);
+  bar.max_frequency = o.positive("max_frequency", bar.max_frequency);
+  if (o.has("damping")) {
+    try {
+      bar.damping = DampingModel::parse(o.string("damping"));
+    } catch (const InputError& e) {
+      fail(o.at("damping"), e.what());
+    }
+  }
+  o.done();
+}
+
+SceneObject parse_object(Obj o, const std::string& base_dir) {
+  SceneObject obj;
+  obj.json_path = o.path();
+  obj.name = o.string("name");
+  if (obj.name.empty()) fail(o.at("name"), "must not be empty");
+  if (o.has("position")) obj.position = o.vec3("position");
+  obj.gain = o.non_negative("gain", 1.0);
+  const int sources = int(o.has("modes")) + int(o.has("bar")) + int(o.has("soundbank"));
+  if (sources != 1) fail(o.path(), "needs exactly one of 'modes', 'bar' or 'soundbank'");
+  if (o.has("modes")) {
+    obj.source = SceneObject::Source::Modes;
+    const json& modes = o.array("modes");
+    if (modes.empty()) fail(o.at("modes"), "must not be empty");
+    for (std::size_t i = 0; i < modes.size(); ++i) {
+      Obj m(modes[i], index_path(o.at("modes"), i));
+      InlineMode im;
+      im.frequency = m.number("frequency");
+      if (!(im.frequency > 0)) fail(m.at("frequency"), "must be > 0");
+      im.decay = m.number("decay");
+      if (im.decay < 0) fail(m.at("decay"), "must be >= 0");
+      im.amplitude = m.number("amplitude");
+      m.done();
+      obj.modes.push_back(im);
+    }
+  } else if (o.has("bar")) {
+    obj.source = SceneObject::Source::Bar;
+    parse_bar(Obj(o.get("bar"), o.at("bar")), obj.bar);
+  } else {
+    obj.source = SceneObject::Source::Soundbank;
+    const std::filesystem::path p(o.string("soundbank"));
+    obj.soundbank = (p.is_absolute() ? p : std::filesystem::path(base_dir) / p).string();
+  }
+  o.done();
+  return obj;
+}
+
+ImpactEvent parse_event(Obj o, const Scene& scene) {
+  ImpactEvent ev;
+  ev.json_path = o.path();
+  const std::string type = o.string("type");
+  if (type != "impact") fail(o.at("type"), "unknown event type '" + type + "' (known: impact)");
+  ev.time = o.number("time");
+  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
+  const std::string name = o.string("object");
+  const auto it = std::find_if(scene.objects.begin(), scene.objects.end(),
+                               [&](const SceneObject& s) { return s.name == name; });
+  if (it == scene.objects.end()) fail(o.at("object"), "unknown object '" + name + "'");
+  ev.object = static_cast<std::size_t>(it - scene.objects.begin());
+  ev.impulse = o.number("impulse");
+  if (!(ev.impulse > 0)) fail(o.at("impulse"), "must be > 0");
+  if (o.has("direction")) ev.direction = o.unit("direction");
+  if (o.has("point") && o.has("vertex")) fail(o.path(), "give 'point' or 'vertex', not both");
+  if (o.has("point")) ev.point = o.vec3("point");
+  if (o.has("vertex")) {
+    const long v = o.integer("vertex");
+    if (v < 0) fail(o.at("vertex"), "must be >= 0");
+    ev.vertex = static_cast<std::size_t>(v);
+  }
+  ev.contact_time = o.non_negative("contact_time", 0.0);
+  if (ev.contact_time > 0.1) fail(o.at("contact_time"), "must be <= 0.1 s");
+  o.done();
+  return ev;
+}
+
+}  // namespace
+
+Scene parse_scene(const json& j, const std::string& base_dir) {
+  Obj root(j, "$");
+  Scene s;
+  if (root.has("sample_rate")) {
+    const long sr = root.integer("sample_rate");
+    if (sr < 8000 || sr > 384000) fail(root.at("sample_rate"), "must lie in [8000, 384000]");
+    s.sample_rate = static_cast<int>(sr);
+  }
+  if (root.has("channels")) {
+    const long ch = root.integer("channels");
+    if (ch != 1 && ch != 2) fail(root.at("channels"), "must be 1 or 2");
+    s.channels = static_cast<int>(ch);
+  }
+  if (root.has("duration")) {
+    s.duration = root.number("duration");
+    if (!(*s.duration > 0) || *s.duration > 3600) fail(root.at("duration"), "must lie in (0, 3600]");
+  }
+  s.gain = root.non_negative("gain", 1.0);
+  if (root.has("listener")) {
+    Obj l(root.get("listener"), root.at("listener"));
+    if (l.has("position")) s.listener.position = l.vec3("position");
+    if (l.has("forward")) s.listener.forward = l.unit("forward");
+    if (l.has("up")) s.listener.up = l.unit("up");
+    l.done();
+    const Vec3 &f = s.listener.forward, &u = s.listener.up;
+    const double c = f[0] * u[0] + f[1] * u[1] + f[2] * u[2];
+    if (std::abs(c) > 0.999) fail(l.path(), "'forward' and 'up' must not be parallel");
+  }
+  const json& objects = root.array("objects");
+  if (objects.empty()) fail(root.at("objects"), "must not be empty");
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    SceneObject obj = parse_object(Obj(objects[i], index_path("$.objects", i)), base_dir);
+    for (const SceneObject& other : s.objects) {
+      if (other.name == obj.name) fail(obj.json_path + ".name", "duplicate name '" + obj.name + "'");
+    }
+    s.objects.push_back(std::move(obj));
+  }
+  const json& events = root.array("events");
+  for (std::size_t i = 0; i < events.size(); ++i) {
+    s.events.push_back(parse_event(Obj(events[i], index_path("$.events", i)), s));
+  }
+  root.done();
+  std::stable_sort(s.events.begin(), s.events.end(),
+                   [](const ImpactEvent& a, const ImpactEvent& b) { return a.time < b.time; });
+  return s;
+}
+
+Scene load_scene(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("cannot open scene file " + path);
+  std::stringstream buf;
+  buf << in.rdbuf();
+  const std::string text = buf.str();
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::parse_error& e) {
+    // Turn the byte offset into a line and column a person can find.
+    std::size_t line = 1, col = 1;
+    for (std::size_t k = 0; k + 1 < e.byte && k < text.size(); ++k) {
+      if (text[k] == '\n') ++line, col = 1;
+      else ++col;
+    }
+    throw InputError(path + ":" + std::to_string(line) + ":" + std::to_string(col) +
+                     ": JSON syntax error: " + e.what());
+  }
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  try {
+    return parse_scene(j, dir.empty() ? "." : dir);
+  } catch (const InputError& e) {
+    throw InputError(path + ": " + e.what());
+  }
+}
+
+}  // namespace chladni

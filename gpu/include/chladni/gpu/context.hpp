@@ -1,0 +1,102 @@
+#pragma once
+// Vulkan instance, physical-device choice and logical device for compute. No sound knowledge.
+#include <vulkan/vulkan.h>
+
+#include <atomic>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace chladni::gpu {
+
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// No usable Vulkan device (no loader, no driver, or the selection matched nothing). Callers
+/// turn this into a CPU fallback with one warning.
+class NoDeviceError : public Error {
+ public:
+  using Error::Error;
+};
+
+/// Throws Error naming the call and the VkResult when r is not VK_SUCCESS.
+void check(VkResult r, const char* what);
+const char* result_name(VkResult r);
+
+struct DeviceInfo {
+  uint32_t index = 0;
+  std::string name;
+  VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+  uint32_t api_version = 0;
+  std::string type_name() const;
+};
+
+struct ContextOptions {
+  /// Index or case-insensitive name substring; empty: $CHLADNI_VULKAN_DEVICE, else the best device
+  /// (discrete > integrated > virtual > CPU).
+  std::string device;
+  /// Enable VK_LAYER_KHRONOS_validation if installed. Default: on in debug builds.
+  bool validation = default_validation();
+  static bool default_validation();
+};
+
+class Context {
+ public:
+  explicit Context(const ContextOptions& options = {});
+  ~Context();
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+
+  /// Lists the Vulkan devices with compute support (throws NoDeviceError without a loader).
+  static std::vector<DeviceInfo> list_devices();
+
+  VkDevice device() const { return device_; }
+  VkPhysicalDevice physical_device() const { return physical_; }
+  VkQueue queue() const { return queue_; }
+  uint32_t queue_family() const { return queue_family_; }
+  VkCommandPool command_pool() const { return pool_; }
+  const DeviceInfo& info() const { return info_; }
+  const VkPhysicalDeviceLimits& limits() const { return properties_.limits; }
+
+  uint32_t subgroup_size() const { return subgroup_size_; }
+  bool subgroup_arithmetic() const { return subgroup_arithmetic_; }
+  bool timestamps() const { return timestamps_; }
+  double timestamp_period_ns() const { return properties_.limits.timestampPeriod; }
+  uint64_t timestamp_mask() const { return timestamp_mask_; }
+
+  /// A memory type index with all `required` flags, preferring one with `preferred` too.
+  uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
+                       VkMemoryPropertyFlags preferred, VkMemoryPropertyFlags* got = nullptr) const;
+
+  bool validation_enabled() const { return messenger_ != VK_NULL_HANDLE; }
+  /// Validation-layer errors reported so far (tests require zero).
+  std::size_t validation_errors() const { return validation_errors_.load(); }
+  std::string describe() const;
+
+ private:
+  void release();
+  static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT,
+                                                   VkDebugUtilsMessageTypeFlagsEXT,
+                                                   const VkDebugUtilsMessengerCallbackDataEXT*,
+                                                   void*);
+  VkInstance instance_ = VK_NULL_HANDLE;
+  VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+  VkPhysicalDevice physical_ = VK_NULL_HANDLE;
+  VkDevice device_ = VK_NULL_HANDLE;
+  VkQueue queue_ = VK_NULL_HANDLE;
+  VkCommandPool pool_ = VK_NULL_HANDLE;
+  uint32_t queue_family_ = 0;
+  DeviceInfo info_;
+  VkPhysicalDeviceProperties properties_{};
+  VkPhysicalDeviceMemoryProperties memory_{};
+  uint32_t subgroup_size_ = 1;
+  bool subgroup_arithmetic_ = false;
+  bool timestamps_ = false;
+  uint64_t timestamp_mask_ = 0;
+  std::atomic<std::size_t> validation_errors_{0};
+};
+
+}  // namespace chladni::gpu

@@ -1,0 +1,68 @@
+#pragma once
+// The CPU reference filterbank: structure-of-arrays state, SIMD across modes (AVX-512F, AVX2+FMA
+// or scalar, chosen at run time), ranges of modes spread over a persistent thread pool.
+#include <memory>
+#include <vector>
+
+#include "chladni/runtime/filterbank.hpp"
+#include "chladni/runtime/thread_pool.hpp"
+
+namespace chladni::runtime {
+
+namespace cpu {
+struct KernelArgs;
+}
+
+enum class CpuIsa { Auto, Scalar, Avx2, Avx512 };
+
+struct CpuFilterbankOptions {
+  uint32_t capacity = 1u << 20;
+  int channels = 1;
+  int threads = 0;  ///< 0: all hardware threads
+  CpuIsa isa = CpuIsa::Auto;
+  uint32_t max_frames = 4096;
+  uint32_t max_excitations = 1u << 20;
+};
+
+class CpuFilterbank final : public Filterbank {
+ public:
+  explicit CpuFilterbank(const CpuFilterbankOptions& options = {});
+  ~CpuFilterbank() override;
+
+  /// Whether this processor can run `isa`.
+  static bool supports(CpuIsa isa);
+
+  std::string name() const override;
+  uint32_t capacity() const override { return capacity_; }
+  int channels() const override { return channels_; }
+  uint32_t max_frames() const override { return max_frames_; }
+  uint32_t max_excitations() const override { return max_excitations_; }
+  int threads() const { return pool_->threads(); }
+
+  void set_mode(uint32_t slot, std::complex<float> pole, const float gains[2]) override;
+  void set_gains(uint32_t slot, const float gains[2]) override;
+  void set_high_water(uint32_t slots) override;
+  void process(std::span<const Excitation> excitations, uint32_t frames, float* out) override;
+  std::complex<float> state(uint32_t slot) override;
+
+ private:
+  struct Task;
+  static void run_task(void* self, int index);
+
+  uint32_t capacity_, padded_, high_water_;
+  int channels_;
+  uint32_t max_frames_, max_excitations_;
+  int isa_;
+  void (*kernel_)(const cpu::KernelArgs&);
+  struct AlignedFree {
+    void operator()(float* p) const;
+  };
+  std::unique_ptr<float[], AlignedFree> pr_, pi_, zr_, zi_, g0_, g1_;
+  std::vector<Excitation> sorted_;
+  std::vector<float> task_out_, task_lanes_;
+  std::vector<uint32_t> task_range_;  // per task: begin, end, exc_begin, exc_end
+  std::unique_ptr<ThreadPool> pool_;
+  uint32_t frames_ = 0;
+};
+
+}  // namespace chladni::runtime

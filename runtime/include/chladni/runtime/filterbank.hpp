@@ -1,0 +1,63 @@
+#pragma once
+// One interface, two implementations (CpuFilterbank, GpuFilterbank). A filterbank holds
+// `capacity()` mode slots; each is a complex one-pole resonator z <- p z + e (DESIGN.md) with one
+// gain per output channel. Slot changes are queued and take effect at the start of the next
+// process(); process() advances all slots [0, high_water) by `frames` samples and writes the
+// interleaved output. Implementations agree sample by sample (tests hold them together).
+#include <complex>
+#include <cstdint>
+#include <span>
+#include <string>
+
+namespace chladni::runtime {
+
+/// An impulse added to a slot's state right after the pole multiplication at sample `offset`
+/// of the next process() call.
+struct Excitation {
+  uint32_t slot;
+  uint32_t offset;
+  float re;
+  float im;
+};
+
+struct FilterbankTiming {
+  double gpu_ms = 0;  ///< device time of the last process() (0 when unknown)
+};
+
+class Filterbank {
+ public:
+  virtual ~Filterbank() = default;
+
+  virtual std::string name() const = 0;  ///< "cpu (avx2, 2 threads)", "gpu (llvmpipe ...)"
+  virtual uint32_t capacity() const = 0;
+  virtual int channels() const = 0;
+  /// Largest `frames` one process() call accepts.
+  virtual uint32_t max_frames() const = 0;
+  /// Largest number of excitations one process() call accepts.
+  virtual uint32_t max_excitations() const = 0;
+
+  /// Starts a mode in `slot`: pole p, zero state, channel gains (gains[1] ignored in mono).
+  virtual void set_mode(uint32_t slot, std::complex<float> pole, const float gains[2]) = 0;
+  /// Changes a slot's gains, keeping its state.
+  virtual void set_gains(uint32_t slot, const float gains[2]) = 0;
+  /// Silences a slot (pole, state and gains to zero).
+  void clear_mode(uint32_t slot) {
+    const float zero[2] = {0, 0};
+    set_mode(slot, {0, 0}, zero);
+  }
+  /// Slots at or above this are known to be clear and are skipped by process().
+  virtual void set_high_water(uint32_t slots) = 0;
+
+  /// Advances by `frames` samples; `out` receives frames * channels() interleaved samples.
+  /// Excitations may come in any order; their offsets must be < frames.
+  virtual void process(std::span<const Excitation> excitations, uint32_t frames, float* out) = 0;
+
+  /// Reads back one slot's state (for tests and diagnostics; may be slow).
+  virtual std::complex<float> state(uint32_t slot) = 0;
+  virtual FilterbankTiming last_timing() const { return {}; }
+};
+
+/// The pole of a mode with damped angular frequency omega_d (rad/s) and decay rate d (1/s).
+std::complex<float> pole(double omega_d, double decay, double sample_rate);
+
+}  // namespace chladni::runtime

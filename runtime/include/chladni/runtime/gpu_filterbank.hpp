@@ -1,0 +1,65 @@
+#pragma once
+// The Vulkan filterbank: mode poles, states and gains stay resident in device memory; per
+// process() only queued slot changes and the excitations go up, and only the output comes back.
+#include <memory>
+#include <vector>
+
+#include "chladni/runtime/filterbank.hpp"
+
+namespace chladni::gpu {
+class Buffer;
+class Context;
+class Pipeline;
+class Sequence;
+}  // namespace chladni::gpu
+
+namespace chladni::runtime {
+
+struct GpuFilterbankOptions {
+  uint32_t capacity = 1u << 20;
+  int channels = 1;
+  uint32_t max_frames = 4096;  ///< lowered automatically to fit the scratch budget
+  uint32_t max_excitations = 1u << 18;
+  uint32_t workgroup_size = 64;
+  uint32_t modes_per_invocation = 4;
+  uint64_t scratch_budget_bytes = 256ull << 20;
+};
+
+class GpuFilterbank final : public Filterbank {
+ public:
+  /// Throws gpu::NoDeviceError when no Vulkan device is usable.
+  GpuFilterbank(std::shared_ptr<gpu::Context> context, const GpuFilterbankOptions& options = {});
+  ~GpuFilterbank() override;
+
+  std::string name() const override;
+  uint32_t capacity() const override { return capacity_; }
+  int channels() const override { return channels_; }
+  uint32_t max_frames() const override { return max_frames_; }
+  uint32_t max_excitations() const override { return max_excitations_; }
+  gpu::Context& context() { return *ctx_; }
+
+  void set_mode(uint32_t slot, std::complex<float> pole, const float gains[2]) override;
+  void set_gains(uint32_t slot, const float gains[2]) override;
+  void set_high_water(uint32_t slots) override;
+  void process(std::span<const Excitation> excitations, uint32_t frames, float* out) override;
+  std::complex<float> state(uint32_t slot) override;
+  FilterbankTiming last_timing() const override { return timing_; }
+
+ private:
+  struct Update;
+  Update& pending(uint32_t slot);
+  void record_updates();
+  void flush_updates();
+
+  std::shared_ptr<gpu::Context> ctx_;
+  uint32_t capacity_, channels_, max_frames_, max_excitations_, high_water_;
+  uint32_t local_, mpi_, rows_per_group_, max_updates_;
+  std::unique_ptr<gpu::Buffer> modes_, gains_, excitations_, scratch_, result_, updates_;
+  std::unique_ptr<gpu::Pipeline> filterbank_, reduce_, apply_;
+  std::unique_ptr<gpu::Sequence> seq_;
+  std::vector<uint32_t> pending_index_;  // per slot: index into the update list, or ~0
+  uint32_t update_count_ = 0;
+  FilterbankTiming timing_;
+};
+
+}  // namespace chladni::runtime

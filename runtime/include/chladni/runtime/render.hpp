@@ -1,0 +1,55 @@
+#pragma once
+// Offline rendering of a scene: one voice per object, impacts placed sample-accurately, gains
+// from the listener's position (1/r spreading, constant-power pan in stereo).
+#include <functional>
+#include <vector>
+
+#include "chladni/core/audio_file.hpp"
+#include "chladni/core/modal_model.hpp"
+#include "chladni/core/scene.hpp"
+#include "chladni/runtime/filterbank.hpp"
+#include "chladni/runtime/synth.hpp"
+
+namespace chladni::runtime {
+
+/// What a scene object sounds like: its modes, and how an impact excites them.
+struct ObjectModes {
+  std::vector<ModeSpec> modes;  ///< damped angular frequency, decay, gain at 1 m
+  /// Complex state kick per mode for an impact; filled by impact_amplitudes().
+  const ModalModel* model = nullptr;           ///< geometry-backed objects
+  const std::vector<InlineMode>* inline_modes = nullptr;
+};
+
+/// Builds the voice description of a modal model: gain_i = radiation_i * omega_d^2 (pressure from
+/// modal acceleration at 1 m).
+ObjectModes object_modes(const ModalModel& model);
+/// Inline modes: amplitude is the pressure at 1 m per N*s of impulse.
+ObjectModes object_modes(const std::vector<InlineMode>& modes);
+
+/// Per-mode complex amplitudes an impact adds to the filterbank states, for an impact whose
+/// contact starts `delay` seconds before the sample at which it is applied (sub-sample timing).
+void impact_amplitudes(const ObjectModes& object, const ImpactEvent& event, double delay,
+                       std::vector<std::complex<float>>& out);
+
+struct RenderOptions {
+  uint32_t block = 256;       ///< frames per filterbank call
+  double max_tail = 60.0;     ///< s after the last event when the scene gives no duration
+  SynthOptions synth;         ///< sample_rate is taken from the scene
+  std::function<void(double fraction)> progress;  ///< optional
+};
+
+struct RenderReport {
+  uint64_t frames = 0;
+  double peak = 0;
+  SynthStats stats;
+  uint32_t max_active_modes = 0;
+  double seconds = 0;  ///< wall time
+};
+
+/// Renders the scene; `objects[i]` describes scene.objects[i]. The filterbank's channel count must
+/// match the scene's.
+AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& objects,
+                         Filterbank& filterbank, const RenderOptions& options,
+                         RenderReport* report = nullptr);
+
+}  // namespace chladni::runtime

@@ -1,0 +1,100 @@
+#pragma once
+// Voices over a filterbank. A voice is a set of modes with a gain each and a per-channel pan.
+// Modes take filterbank slots only while they ring: an excitation makes them resident, and a mode
+// whose envelope has fallen `retire_db` below its peak is retired and its slot reused. When the
+// mode budget is full, the least audible resident modes are stolen.
+//
+// Threading: start_voice() allocates and belongs on a control thread; excite(), set_*(),
+// stop_voice() and render() do not allocate, lock or block (beyond the filterbank's own work).
+#include <complex>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "chladni/runtime/filterbank.hpp"
+
+namespace chladni::runtime {
+
+struct ModeSpec {
+  double omega_d = 0;  ///< damped angular frequency (rad/s)
+  double decay = 0;    ///< 1/s
+  float gain = 1;      ///< output per unit of modal state Im(z)
+};
+
+struct SynthOptions {
+  double sample_rate = 48000;
+  uint32_t max_modes = 0;     ///< mode budget; 0: the filterbank's capacity
+  double retire_db = -100;    ///< retire a mode this far below its peak envelope
+  uint32_t max_voices = 1024;
+};
+
+struct SynthStats {
+  uint64_t retired = 0;  ///< modes retired by envelope
+  uint64_t stolen = 0;   ///< modes stolen to make room
+  uint64_t skipped = 0;  ///< excitations too weak to make a mode resident
+};
+
+class Synth {
+ public:
+  using VoiceId = int32_t;
+  Synth(Filterbank& filterbank, const SynthOptions& options);
+
+  /// Registers a voice (no slot is taken yet). Throws InputError on non-finite values.
+  VoiceId start_voice(std::span<const ModeSpec> modes);
+  /// Per-channel gains of the whole voice (right ignored in mono). Default 1, 1.
+  void set_pan(VoiceId voice, float left, float right);
+  /// New per-mode gains; resident modes change at the next render().
+  void set_mode_gains(VoiceId voice, std::span<const float> gains);
+  /// Adds amplitude[i] to mode i's state at sample `offset` of the next render().
+  void excite(VoiceId voice, std::span<const std::complex<float>> amplitude, uint32_t offset);
+  /// Silences and forgets the voice; its slots are freed at once.
+  void stop_voice(VoiceId voice);
+
+  /// Renders `frames` (<= max_frames()) interleaved frames into `out`.
+  void render(uint32_t frames, float* out);
+
+  uint32_t max_frames() const { return fb_.max_frames(); }
+  uint32_t pending_excitations() const { return static_cast<uint32_t>(pending_count_); }
+  uint32_t excitation_capacity() const { return fb_.max_excitations(); }
+  uint32_t active_modes() const { return used_; }
+  uint32_t high_water() const { return high_water_; }
+  uint64_t time() const { return now_; }  ///< samples rendered so far
+  const SynthStats& stats() const { return stats_; }
+  int slot_of(VoiceId voice, std::size_t mode) const;
+
+ private:
+  struct Voice {
+    bool alive = false;
+    std::vector<ModeSpec> modes;
+    std::vector<int32_t> slot;  // -1 when not resident
+    float pan[2] = {1, 1};
+  };
+  uint32_t allocate_slot();
+  void free_slot(uint32_t slot);
+  void steal(uint32_t needed);
+  void apply_gains(uint32_t slot);
+  void drop_pending(uint32_t slot);
+  Voice& voice(VoiceId id);
+
+  Filterbank& fb_;
+  SynthOptions opt_;
+  double threshold_;  // amplitude ratio of retire_db
+  uint32_t budget_;
+  std::vector<Voice> voices_;
+  // Per slot: owner, envelope bound |z| <= env at time env_time, peak, decay per sample, retire
+  // time (samples).
+  std::vector<int32_t> slot_voice_;
+  std::vector<uint32_t> slot_mode_;
+  std::vector<float> env_, peak_, rate_;
+  std::vector<int64_t> env_time_, retire_at_;
+  std::vector<uint32_t> free_heap_;  // min-heap keeps resident slots low (fewer to process)
+  std::vector<uint32_t> group_used_;  // resident slots per group of 256
+  std::vector<std::pair<float, uint32_t>> steal_scratch_;
+  std::vector<Excitation> pending_;
+  std::size_t pending_count_ = 0;
+  uint32_t used_ = 0, high_water_ = 0, scan_cursor_ = 0;
+  uint64_t now_ = 0;
+  SynthStats stats_;
+};
+
+}  // namespace chladni::runtime

@@ -1,0 +1,123 @@
+#pragma once
+// Included by exactly one translation unit per instruction set, each compiled with its own
+// target flags; everything here has internal linkage so the instantiations never merge.
+#include <algorithm>
+#include <cstring>
+
+#include "cpu_kernels.hpp"
+
+namespace chladni::runtime::cpu {
+namespace {
+
+// S: a SIMD "ops" struct with type V, width W, load/store/set1/zero/add/mul/fmadd/fmsub.
+template <class S, int CH, int NV>
+void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Excitation* ex_end) {
+  using V = typename S::V;
+  constexpr int W = S::W;
+  constexpr uint32_t T = W * NV;
+  V pr[NV], pi[NV], zr[NV], zi[NV], g0[NV], g1[NV];
+  for (int v = 0; v < NV; ++v) {
+    const uint32_t s = t0 + v * W;
+    pr[v] = S::load(a.pr + s);
+    pi[v] = S::load(a.pi + s);
+    zr[v] = S::load(a.zr + s);
+    zi[v] = S::load(a.zi + s);
+    g0[v] = S::load(a.g0 + s);
+    g1[v] = CH == 2 ? S::load(a.g1 + s) : S::zero();
+  }
+  // z <- p z (Eq. of DESIGN.md), written as the GPU does: (pr zr - pi zi, pr zi + pi zr).
+  auto step = [&] {
+    for (int v = 0; v < NV; ++v) {
+      const V nr = S::fmsub(pr[v], zr[v], S::mul(pi[v], zi[v]));
+      const V ni = S::fmadd(pr[v], zi[v], S::mul(pi[v], zr[v]));
+      zr[v] = nr;
+      zi[v] = ni;
+    }
+  };
+  auto emit = [&](uint32_t n) {
+    V acc0 = S::zero(), acc1 = S::zero();
+    for (int v = 0; v < NV; ++v) {
+      acc0 = S::fmadd(g0[v], zi[v], acc0);
+      if constexpr (CH == 2) acc1 = S::fmadd(g1[v], zi[v], acc1);
+    }
+    float* l = a.lanes + static_cast<std::size_t>(n) * CH * W;
+    S::store(l, S::add(S::load(l), acc0));
+    if constexpr (CH == 2) S::store(l + W, S::add(S::load(l + W), acc1));
+  };
+
+  // Only excitations of this tile matter; they come in offset order.
+  auto next_in_tile = [&](const Excitation* e) {
+    while (e != ex_end && (e->slot < t0 || e->slot >= t0 + T)) ++e;
+    return e;
+  };
+  const Excitation* e = next_in_tile(ex);
+  uint32_t n = 0;
+  while (n < a.frames) {
+    const uint32_t stop = e != ex_end ? e->offset : a.frames;
+    for (; n < stop; ++n) {  // the hot loop: no excitation in [n, stop)
+      step();
+      emit(n);
+    }
+    if (n == a.frames) break;
+    // Sample n carries excitations: step, add them lane by lane, emit.
+    step();
+    alignas(64) float br[T], bi[T];
+    for (int v = 0; v < NV; ++v) {
+      S::store(br + v * W, zr[v]);
+      S::store(bi + v * W, zi[v]);
+    }
+    for (; e != ex_end && e->offset == n; e = next_in_tile(e + 1)) {
+      br[e->slot - t0] += e->re;
+      bi[e->slot - t0] += e->im;
+    }
+    for (int v = 0; v < NV; ++v) {
+      zr[v] = S::load(br + v * W);
+      zi[v] = S::load(bi + v * W);
+    }
+    emit(n);
+    ++n;
+  }
+  for (int v = 0; v < NV; ++v) {
+    S::store(a.zr + t0 + v * W, zr[v]);
+    S::store(a.zi + t0 + v * W, zi[v]);
+  }
+}
+
+template <class S, int CH, int NV>
+void run_range(const KernelArgs& a) {
+  constexpr int W = S::W;
+  constexpr uint32_t T = W * NV;
+  static_assert(kGroup % T == 0, "tiles must divide the excitation group");
+  std::memset(a.lanes, 0, sizeof(float) * a.frames * CH * W);
+  const Excitation* ex = a.exc;
+  const Excitation* ex_all_end = a.exc + a.exc_count;
+  for (uint32_t g0 = a.begin; g0 < a.end; g0 += kGroup) {
+    // This group's excitations, [ex, gend), sorted by offset.
+    while (ex != ex_all_end && ex->slot < g0) ++ex;
+    const Excitation* gend = ex;
+    while (gend != ex_all_end && gend->slot < g0 + kGroup) ++gend;
+    for (uint32_t t0 = g0; t0 < g0 + kGroup; t0 += T) run_tile<S, CH, NV>(a, t0, ex, gend);
+    ex = gend;
+  }
+  // Flush states far below audibility (denormals are slow and inaudible).
+  for (uint32_t s = a.begin; s < a.end; ++s) {
+    if (a.zr[s] * a.zr[s] + a.zi[s] * a.zi[s] < 1e-30f) a.zr[s] = a.zi[s] = 0.0f;
+  }
+  for (uint32_t n = 0; n < a.frames; ++n) {
+    for (int c = 0; c < CH; ++c) {
+      const float* l = a.lanes + (static_cast<std::size_t>(n) * CH + c) * W;
+      float sum = 0.0f;
+      for (int w = 0; w < W; ++w) sum += l[w];
+      a.out[n * CH + c] = sum;
+    }
+  }
+}
+
+template <class S, int NV>
+void kernel_entry(const KernelArgs& a) {
+  if (a.channels == 2) run_range<S, 2, NV>(a);
+  else run_range<S, 1, NV>(a);
+}
+
+}  // namespace
+}  // namespace chladni::runtime::cpu

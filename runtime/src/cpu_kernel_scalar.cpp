@@ -1,0 +1,23 @@
+// Portable scalar build of the filterbank loop (also the reference for the SIMD builds).
+#include <cmath>
+
+#include "cpu_kernel_impl.hpp"
+
+namespace chladni::runtime::cpu {
+namespace {
+struct Scalar {
+  using V = float;
+  static constexpr int W = 1;
+  static V load(const float* p) { return *p; }
+  static void store(float* p, V v) { *p = v; }
+  static V zero() { return 0.0f; }
+  static V add(V a, V b) { return a + b; }
+  static V mul(V a, V b) { return a * b; }
+  static V fmadd(V a, V b, V c) { return std::fma(a, b, c); }
+  static V fmsub(V a, V b, V c) { return std::fma(a, b, -c); }
+};
+}  // namespace
+
+Kernel scalar_kernel() { return &kernel_entry<Scalar, 8>; }
+
+}  // namespace chladni::runtime::cpu

@@ -1,0 +1,223 @@
+#include "chladni/runtime/gpu_filterbank.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <stdexcept>
+
+#include "chladni/gpu/buffer.hpp"
+#include "chladni/gpu/context.hpp"
+#include "chladni/gpu/pipeline.hpp"
+#include "chladni/gpu/sequence.hpp"
+#include "chladni/kernels/apply_updates.spv.h"
+#include "chladni/kernels/filterbank.spv.h"
+#include "chladni/kernels/reduce.spv.h"
+
+namespace chladni::runtime {
+namespace {
+
+constexpr uint32_t kNone = ~0u;
+constexpr uint32_t kReduceChunk = 64;  // rows summed per reduce invocation
+
+uint32_t div_up(uint64_t a, uint64_t b) { return static_cast<uint32_t>((a + b - 1) / b); }
+
+struct FilterbankPush {
+  uint32_t mode_count, samples, exc_count, pad;
+};
+struct ReducePush {
+  uint32_t src_offset, dst_offset, rows, count, chunk, final_pass;
+};
+
+}  // namespace
+
+struct GpuFilterbank::Update {
+  uint32_t slot, flags;
+  float gain[2];
+  float pz[4];
+};
+
+GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterbankOptions& o)
+    : ctx_(std::move(ctx)),
+      capacity_(o.capacity),
+      channels_(static_cast<uint32_t>(o.channels)),
+      max_excitations_(o.max_excitations),
+      high_water_(o.capacity),
+      local_(o.workgroup_size),
+      mpi_(o.modes_per_invocation) {
+  static_assert(sizeof(Update) == 32, "matches apply_updates.comp");
+  if (!ctx_) throw std::invalid_argument("GpuFilterbank needs a Vulkan context");
+  if (capacity_ == 0) throw std::invalid_argument("filterbank capacity must be > 0");
+  if (channels_ != 1 && channels_ != 2) throw std::invalid_argument("channels must be 1 or 2");
+  gpu::Context& c = *ctx_;
+  if (!c.subgroup_arithmetic()) {
+    throw gpu::NoDeviceError(c.info().name + " lacks subgroup arithmetic in compute shaders");
+  }
+  const VkPhysicalDeviceLimits& lim = c.limits();
+  local_ = std::min(local_, lim.maxComputeWorkGroupSize[0]);
+  local_ = std::min(local_, lim.maxComputeWorkGroupInvocations);
+  // Subgroups per workgroup bound the partial rows each workgroup writes.
+  rows_per_group_ = div_up(local_, c.subgroup_size());
+  const uint32_t group_modes = local_ * mpi_;
+  const uint32_t groups = div_up(capacity_, group_modes);
+  if (groups > lim.maxComputeWorkGroupCount[0]) {
+    throw gpu::Error("filterbank capacity needs more workgroups than the device allows");
+  }
+  const uint64_t rows = uint64_t{groups} * rows_per_group_;
+  // Scratch holds rows x frames x channels partials plus the first reduce level.
+  const uint64_t per_frame = (rows + div_up(rows, kReduceChunk)) * channels_ * sizeof(float);
+  const uint64_t budget = std::min<uint64_t>(o.scratch_budget_bytes, lim.maxStorageBufferRange);
+  max_frames_ = static_cast<uint32_t>(std::min<uint64_t>(o.max_frames, budget / per_frame));
+  if (max_frames_ < 1) throw gpu::Error("filterbank capacity too large for the scratch budget");
+
+  const uint64_t mode_bytes = uint64_t{groups} * group_modes * 16;
+  if (mode_bytes > lim.maxStorageBufferRange) {
+    throw gpu::Error("filterbank capacity exceeds the device's storage buffer range");
+  }
+  modes_ = std::make_unique<gpu::Buffer>(c, mode_bytes, gpu::Memory::DeviceLocal);
+  gains_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 8,
+                                         gpu::Memory::DeviceLocal);
+  excitations_ = std::make_unique<gpu::Buffer>(c, uint64_t{std::max(1u, max_excitations_)} * 16,
+                                               gpu::Memory::HostVisible);
+  scratch_ = std::make_unique<gpu::Buffer>(c, per_frame * max_frames_, gpu::Memory::DeviceLocal);
+  result_ = std::make_unique<gpu::Buffer>(c, uint64_t{max_frames_} * channels_ * sizeof(float),
+                                          gpu::Memory::HostVisible);
+  max_updates_ = std::min(capacity_, 1u << 16);
+  updates_ = std::make_unique<gpu::Buffer>(c, uint64_t{max_updates_} * sizeof(Update),
+                                           gpu::Memory::HostVisible);
+  modes_->zero();
+  gains_->zero();
+
+  const gpu::SpecConstant fb_spec[] = {
+      {0, local_}, {1, mpi_}, {2, channels_}, {3, rows_per_group_}};
+  filterbank_ = std::make_unique<gpu::Pipeline>(c, std::span(k_filterbank_spv), 4,
+                                                sizeof(FilterbankPush), fb_spec);
+  filterbank_->bind(0, *modes_);
+  filterbank_->bind(1, *gains_);
+  filterbank_->bind(2, *excitations_);
+  filterbank_->bind(3, *scratch_);
+  reduce_ = std::make_unique<gpu::Pipeline>(c, std::span(k_reduce_spv), 2, sizeof(ReducePush));
+  reduce_->bind(0, *scratch_);
+  reduce_->bind(1, *result_);
+  apply_ = std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 3, sizeof(uint32_t));
+  apply_->bind(0, *modes_);
+  apply_->bind(1, *gains_);
+  apply_->bind(2, *updates_);
+  seq_ = std::make_unique<gpu::Sequence>(c, 4);
+  pending_index_.assign(capacity_, kNone);
+}
+
+GpuFilterbank::~GpuFilterbank() = default;
+
+std::string GpuFilterbank::name() const { return "gpu (" + ctx_->describe() + ")"; }
+
+GpuFilterbank::Update& GpuFilterbank::pending(uint32_t slot) {
+  if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
+  auto* list = static_cast<Update*>(updates_->data());
+  uint32_t& idx = pending_index_[slot];
+  if (idx == kNone) {
+    if (update_count_ == max_updates_) flush_updates();
+    idx = update_count_++;
+    list[idx] = Update{slot, 0, {0, 0}, {0, 0, 0, 0}};
+  }
+  return list[idx];
+}
+
+void GpuFilterbank::set_mode(uint32_t slot, std::complex<float> p, const float gains[2]) {
+  Update& u = pending(slot);
+  u.flags |= 3u;
+  u.pz[0] = p.real();
+  u.pz[1] = p.imag();
+  u.pz[2] = u.pz[3] = 0.0f;
+  u.gain[0] = gains[0];
+  u.gain[1] = channels_ == 2 ? gains[1] : 0.0f;
+}
+
+void GpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
+  Update& u = pending(slot);
+  u.flags |= 2u;
+  u.gain[0] = gains[0];
+  u.gain[1] = channels_ == 2 ? gains[1] : 0.0f;
+}
+
+void GpuFilterbank::set_high_water(uint32_t slots) { high_water_ = std::min(slots, capacity_); }
+
+void GpuFilterbank::record_updates() {
+  if (!update_count_) return;
+  seq_->dispatch(*apply_, div_up(update_count_, 64), &update_count_, sizeof(uint32_t));
+  seq_->barrier();
+}
+
+void GpuFilterbank::flush_updates() {
+  seq_->begin();
+  record_updates();
+  seq_->run();
+  auto* list = static_cast<Update*>(updates_->data());
+  for (uint32_t i = 0; i < update_count_; ++i) pending_index_[list[i].slot] = kNone;
+  update_count_ = 0;
+}
+
+std::complex<float> GpuFilterbank::state(uint32_t slot) {
+  if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
+  if (update_count_) flush_updates();
+  float m[4];
+  modes_->download(m, sizeof(m), uint64_t{slot} * 16);
+  return {m[2], m[3]};
+}
+
+void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t frames, float* out) {
+  if (frames > max_frames_) throw std::invalid_argument("process: frames exceeds max_frames()");
+  if (excitations.size() > max_excitations_) {
+    throw std::invalid_argument("process: more excitations than max_excitations()");
+  }
+  if (frames == 0) return;
+  // The shader walks each slot's excitations in offset order: sort by (slot, offset).
+  auto* exc = static_cast<Excitation*>(excitations_->data());
+  const uint32_t ne = static_cast<uint32_t>(excitations.size());
+  for (uint32_t k = 0; k < ne; ++k) {
+    if (excitations[k].slot >= capacity_ || excitations[k].offset >= frames) {
+      throw std::out_of_range("process: excitation slot or offset out of range");
+    }
+    exc[k] = excitations[k];
+  }
+  std::sort(exc, exc + ne, [](const Excitation& a, const Excitation& b) {
+    return a.slot != b.slot ? a.slot < b.slot : a.offset < b.offset;
+  });
+
+  const uint32_t group_modes = local_ * mpi_;
+  const uint32_t groups = div_up(high_water_, group_modes);
+  const uint32_t count = frames * channels_;
+  seq_->begin();
+  seq_->timestamp(0);
+  record_updates();
+  if (groups == 0) {
+    seq_->fill_zero(*result_);
+    seq_->barrier();
+  } else {
+    const FilterbankPush fp{groups * group_modes, frames, ne, 0};
+    seq_->dispatch(*filterbank_, groups, &fp, sizeof(fp));
+    seq_->barrier();
+    seq_->timestamp(1);
+    // Tree reduction of the partial rows: rows -> ceil(rows/64) -> ... -> result.
+    uint32_t rows = groups * rows_per_group_;
+    uint32_t src = 0, dst = rows * count;
+    while (rows > kReduceChunk) {
+      const uint32_t next_rows = div_up(rows, kReduceChunk);
+      const ReducePush rp{src, dst, rows, count, kReduceChunk, 0};
+      seq_->dispatch(*reduce_, div_up(uint64_t{next_rows} * count, 64), &rp, sizeof(rp));
+      seq_->barrier();
+      rows = next_rows;
+      std::swap(src, dst);  // ping-pong between the partials region and the one after it
+    }
+    const ReducePush rp{src, 0, rows, count, kReduceChunk, 1};
+    seq_->dispatch(*reduce_, div_up(count, 64), &rp, sizeof(rp));
+    seq_->barrier();
+  }
+  seq_->timestamp(2);
+  seq_->run();
+  timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
+  std::memcpy(out, result_->data(), sizeof(float) * count);
+  auto* list = static_cast<Update*>(updates_->data());
+  for (uint32_t i = 0; i < update_count_; ++i) pending_index_[list[i].slot] = kNone;
+  update_count_ = 0;
+}
+
+}  // namespace chladni::runtime

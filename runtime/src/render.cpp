@@ -1,0 +1,158 @@
+#include "chladni/runtime/render.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+
+#include "chladni/core/error.hpp"
+#include "chladni/runtime/impact.hpp"
+
+namespace chladni::runtime {
+namespace {
+
+double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+
+// Spherical spreading relative to 1 m, clamped so an object at the listener stays finite.
+constexpr double kMinDistance = 0.1;
+
+}  // namespace
+
+ObjectModes object_modes(const ModalModel& model) {
+  model.validate();
+  ObjectModes o;
+  o.model = &model;
+  for (std::size_t i = 0; i < model.mode_count(); ++i) {
+    const double wd = model.damped_omega(i);
+    o.modes.push_back({wd, model.decay[i], static_cast<float>(model.radiation[i] * wd * wd)});
+  }
+  return o;
+}
+
+ObjectModes object_modes(const std::vector<InlineMode>& modes) {
+  ObjectModes o;
+  o.inline_modes = &modes;
+  for (const InlineMode& m : modes) o.modes.push_back({2.0 * M_PI * m.frequency, m.decay, 1.0f});
+  return o;
+}
+
+void impact_amplitudes(const ObjectModes& object, const ImpactEvent& ev, double delay,
+                       std::vector<std::complex<float>>& out) {
+  out.resize(object.modes.size());
+  std::size_t point = 0;
+  if (object.model && object.model->has_geometry()) {
+    if (ev.vertex) {
+      if (*ev.vertex >= object.model->points.size()) {
+        throw InputError(ev.json_path + ".vertex: " + std::to_string(*ev.vertex) +
+                         " is out of range (object has " +
+                         std::to_string(object.model->points.size()) + " surface points)");
+      }
+      point = *ev.vertex;
+    } else if (ev.point) {
+      point = object.model->nearest_point(*ev.point);
+    }
+  }
+  for (std::size_t i = 0; i < object.modes.size(); ++i) {
+    const ModeSpec& m = object.modes[i];
+    const std::complex<double> lambda(-m.decay, m.omega_d);
+    // Advance the kick from contact start to the sample where it is applied.
+    std::complex<double> w = contact_weight(ev.impulse, ev.contact_time, m.omega_d, m.decay) *
+                             std::exp(lambda * delay);
+    if (object.inline_modes) {
+      w *= (*object.inline_modes)[i].amplitude;
+    } else if (object.model) {
+      // q_i = (v_i(x) . n) J / omega_d ... (DESIGN.md)
+      const double vn = object.model->has_geometry()
+                            ? dot(object.model->shape(i, point), ev.direction)
+                            : 1.0;
+      w *= m.omega_d > 0 ? vn / m.omega_d : 0.0;
+    }
+    out[i] = std::complex<float>(static_cast<float>(w.real()), static_cast<float>(w.imag()));
+  }
+}
+
+AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& objects,
+                         Filterbank& fb, const RenderOptions& options, RenderReport* report) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (objects.size() != scene.objects.size()) throw InternalError("render: object count mismatch");
+  if (fb.channels() != scene.channels) throw InternalError("render: channel count mismatch");
+  const double fs = scene.sample_rate;
+  const uint32_t block = std::min(options.block, fb.max_frames());
+  if (block == 0) throw InputError("block size must be > 0");
+  SynthOptions so = options.synth;
+  so.sample_rate = fs;
+  so.max_voices = std::max<uint32_t>(so.max_voices, static_cast<uint32_t>(objects.size()));
+  Synth synth(fb, so);
+
+  // Listener frame: right = forward x up.
+  const Listener& L = scene.listener;
+  const Vec3 right = cross(L.forward, L.up);
+  const double rn = std::sqrt(dot(right, right));
+  std::vector<Synth::VoiceId> voices;
+  for (std::size_t k = 0; k < objects.size(); ++k) {
+    const SceneObject& so_k = scene.objects[k];
+    const Vec3 d = sub(so_k.position, L.position);
+    const double r = std::sqrt(dot(d, d));
+    const double g = scene.gain * so_k.gain / std::max(r, kMinDistance);
+    std::vector<ModeSpec> modes = objects[k].modes;
+    for (ModeSpec& m : modes) m.gain = static_cast<float>(m.gain * g);
+    const Synth::VoiceId v = synth.start_voice(modes);
+    if (scene.channels == 2) {
+      const double s = r > 1e-9 ? std::clamp(dot(d, right) / (r * rn), -1.0, 1.0) : 0.0;
+      const double theta = (s + 1.0) * M_PI / 4.0;  // constant-power pan
+      synth.set_pan(v, static_cast<float>(std::cos(theta)), static_cast<float>(std::sin(theta)));
+    }
+    voices.push_back(v);
+  }
+
+  const double last_event = scene.events.empty() ? 0.0 : scene.events.back().time;
+  const uint64_t limit = static_cast<uint64_t>(
+      std::ceil((scene.duration ? *scene.duration : last_event + options.max_tail) * fs));
+  AudioBuffer audio;
+  audio.sample_rate = scene.sample_rate;
+  audio.channels = scene.channels;
+  audio.samples.reserve(static_cast<std::size_t>(std::min<uint64_t>(limit, 1ull << 28)) * scene.channels);
+  std::vector<float> buf(static_cast<std::size_t>(block) * scene.channels);
+  std::vector<std::complex<float>> amps;
+  std::size_t next = 0;
+  uint64_t t = 0;
+  RenderReport rep;
+  while (t < limit) {
+    uint32_t frames = static_cast<uint32_t>(std::min<uint64_t>(block, limit - t));
+    // Events whose first sample falls in [t, t + frames): sample = ceil(time * fs).
+    while (next < scene.events.size()) {
+      const ImpactEvent& ev = scene.events[next];
+      const uint64_t at = static_cast<uint64_t>(std::ceil(ev.time * fs));
+      if (at >= t + frames) break;
+      const ObjectModes& obj = objects[ev.object];
+      if (synth.pending_excitations() + obj.modes.size() > synth.excitation_capacity()) {
+        if (at > t) frames = static_cast<uint32_t>(at - t);  // render up to it, then excite
+        break;
+      }
+      impact_amplitudes(obj, ev, static_cast<double>(at) / fs - ev.time, amps);
+      synth.excite(voices[ev.object], amps, static_cast<uint32_t>(at - t));
+      ++next;
+    }
+    synth.render(frames, buf.data());
+    rep.max_active_modes = std::max(rep.max_active_modes, synth.active_modes());
+    audio.samples.insert(audio.samples.end(), buf.begin(), buf.begin() + frames * scene.channels);
+    t += frames;
+    if (options.progress && (t / block) % 256 == 0) options.progress(double(t) / double(limit));
+    // Without a duration, stop once every event is played and everything has rung out.
+    if (!scene.duration && next == scene.events.size() && synth.active_modes() == 0 &&
+        double(t) / fs >= last_event) {
+      break;
+    }
+  }
+  for (float x : audio.samples) rep.peak = std::max(rep.peak, double(std::abs(x)));
+  rep.frames = audio.frames();
+  rep.stats = synth.stats();
+  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (report) *report = rep;
+  return audio;
+}
+
+}  // namespace chladni::runtime

@@ -1,0 +1,243 @@
+#include "chladni/runtime/synth.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <stdexcept>
+
+#include "chladni/core/error.hpp"
+
+namespace chladni::runtime {
+namespace {
+constexpr uint32_t kGroup = 256;
+constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
+}  // namespace
+
+Synth::Synth(Filterbank& fb, const SynthOptions& o)
+    : fb_(fb), opt_(o), threshold_(std::pow(10.0, o.retire_db / 20.0)) {
+  if (!(o.sample_rate > 0) || !std::isfinite(o.sample_rate)) {
+    throw InputError("sample rate must be a positive number");
+  }
+  if (!(o.retire_db < 0)) throw InputError("retire threshold must be below 0 dB");
+  budget_ = o.max_modes ? std::min(o.max_modes, fb.capacity()) : fb.capacity();
+  voices_.resize(o.max_voices);
+  slot_voice_.assign(budget_, -1);
+  slot_mode_.assign(budget_, 0);
+  env_.assign(budget_, 0.0f);
+  peak_.assign(budget_, 0.0f);
+  rate_.assign(budget_, 0.0f);
+  env_time_.assign(budget_, 0);
+  retire_at_.assign(budget_, kNever);
+  free_heap_.resize(budget_);
+  for (uint32_t s = 0; s < budget_; ++s) free_heap_[s] = s;  // sorted: already a min-heap
+  group_used_.assign((budget_ + kGroup - 1) / kGroup, 0);
+  steal_scratch_.reserve(budget_);
+  pending_.resize(fb.max_excitations());
+  fb_.set_high_water(0);
+}
+
+Synth::Voice& Synth::voice(VoiceId id) {
+  if (id < 0 || static_cast<std::size_t>(id) >= voices_.size() || !voices_[id].alive) {
+    throw std::invalid_argument("unknown voice id " + std::to_string(id));
+  }
+  return voices_[id];
+}
+
+int Synth::slot_of(VoiceId id, std::size_t mode) const {
+  return voices_.at(id).slot.at(mode);
+}
+
+Synth::VoiceId Synth::start_voice(std::span<const ModeSpec> modes) {
+  for (std::size_t i = 0; i < modes.size(); ++i) {
+    const ModeSpec& m = modes[i];
+    if (!std::isfinite(m.omega_d) || m.omega_d < 0 || !std::isfinite(m.decay) || m.decay < 0 ||
+        !std::isfinite(m.gain)) {
+      throw InputError("voice mode " + std::to_string(i) +
+                       ": frequency, decay and gain must be finite and non-negative");
+    }
+  }
+  for (std::size_t v = 0; v < voices_.size(); ++v) {
+    if (!voices_[v].alive) {
+      Voice& voice = voices_[v];
+      voice.alive = true;
+      voice.modes.assign(modes.begin(), modes.end());
+      voice.slot.assign(modes.size(), -1);
+      voice.pan[0] = voice.pan[1] = 1.0f;
+      return static_cast<VoiceId>(v);
+    }
+  }
+  throw std::runtime_error("no free voice (max_voices = " + std::to_string(voices_.size()) + ")");
+}
+
+void Synth::apply_gains(uint32_t slot) {
+  const Voice& v = voices_[slot_voice_[slot]];
+  const float g = v.modes[slot_mode_[slot]].gain;
+  const float gains[2] = {g * v.pan[0], g * v.pan[1]};
+  fb_.set_gains(slot, gains);
+}
+
+void Synth::set_pan(VoiceId id, float left, float right) {
+  Voice& v = voice(id);
+  if (!std::isfinite(left) || !std::isfinite(right)) throw InputError("pan gains must be finite");
+  v.pan[0] = left;
+  v.pan[1] = right;
+  for (int32_t s : v.slot) {
+    if (s >= 0) apply_gains(static_cast<uint32_t>(s));
+  }
+}
+
+void Synth::set_mode_gains(VoiceId id, std::span<const float> gains) {
+  Voice& v = voice(id);
+  if (gains.size() != v.modes.size()) throw std::invalid_argument("set_mode_gains: wrong count");
+  for (std::size_t i = 0; i < gains.size(); ++i) {
+    if (!std::isfinite(gains[i])) throw InputError("mode gain " + std::to_string(i) + " is not finite");
+    v.modes[i].gain = gains[i];
+    if (v.slot[i] >= 0) apply_gains(static_cast<uint32_t>(v.slot[i]));
+  }
+}
+
+uint32_t Synth::allocate_slot() {
+  if (free_heap_.empty()) return ~0u;
+  std::pop_heap(free_heap_.begin(), free_heap_.end(), std::greater<>());
+  const uint32_t s = free_heap_.back();
+  free_heap_.pop_back();  // capacity stays: no allocation later
+  ++used_;
+  ++group_used_[s / kGroup];
+  high_water_ = std::max(high_water_, (s / kGroup + 1) * kGroup);
+  return s;
+}
+
+void Synth::free_slot(uint32_t s) {
+  Voice& v = voices_[slot_voice_[s]];
+  v.slot[slot_mode_[s]] = -1;
+  slot_voice_[s] = -1;
+  retire_at_[s] = kNever;
+  fb_.clear_mode(s);
+  free_heap_.push_back(s);
+  std::push_heap(free_heap_.begin(), free_heap_.end(), std::greater<>());
+  --used_;
+  --group_used_[s / kGroup];
+}
+
+void Synth::drop_pending(uint32_t slot) {
+  std::size_t w = 0;
+  for (std::size_t r = 0; r < pending_count_; ++r) {
+    if (pending_[r].slot != slot) pending_[w++] = pending_[r];
+  }
+  pending_count_ = w;
+}
+
+void Synth::steal(uint32_t needed) {
+  // The least audible resident modes: envelope bound now times the larger channel gain.
+  steal_scratch_.clear();
+  for (uint32_t s = 0; s < budget_; ++s) {
+    if (slot_voice_[s] < 0) continue;
+    const Voice& v = voices_[slot_voice_[s]];
+    const double g = std::abs(v.modes[slot_mode_[s]].gain) * std::max(std::abs(v.pan[0]), std::abs(v.pan[1]));
+    const double env = env_[s] * std::exp(-double(rate_[s]) * double(int64_t(now_) - env_time_[s]));
+    steal_scratch_.emplace_back(static_cast<float>(env * g), s);
+  }
+  needed = std::min<uint32_t>(needed, static_cast<uint32_t>(steal_scratch_.size()));
+  std::nth_element(steal_scratch_.begin(), steal_scratch_.begin() + needed, steal_scratch_.end());
+  for (uint32_t k = 0; k < needed; ++k) {
+    const uint32_t s = steal_scratch_[k].second;
+    drop_pending(s);
+    free_slot(s);
+    ++stats_.stolen;
+  }
+}
+
+void Synth::excite(VoiceId id, std::span<const std::complex<float>> amp, uint32_t offset) {
+  Voice& v = voice(id);
+  if (amp.size() != v.modes.size()) throw std::invalid_argument("excite: wrong amplitude count");
+  if (offset >= fb_.max_frames()) throw std::invalid_argument("excite: offset beyond one render");
+  // Modes whose kick is below the retire threshold of the strongest one would retire at once.
+  double strongest = 0;
+  uint32_t new_slots = 0;
+  for (std::size_t i = 0; i < amp.size(); ++i) {
+    if (!std::isfinite(amp[i].real()) || !std::isfinite(amp[i].imag())) {
+      throw InputError("excitation of mode " + std::to_string(i) + " is not finite");
+    }
+    strongest = std::max(strongest, double(std::abs(amp[i])) * std::abs(v.modes[i].gain));
+  }
+  if (strongest == 0) return;
+  const double floor = strongest * threshold_;
+  for (std::size_t i = 0; i < amp.size(); ++i) {
+    if (v.slot[i] < 0 && double(std::abs(amp[i])) * std::abs(v.modes[i].gain) > floor) ++new_slots;
+  }
+  if (new_slots > free_heap_.size()) steal(new_slots - static_cast<uint32_t>(free_heap_.size()));
+  const int64_t t = static_cast<int64_t>(now_) + offset;
+  for (std::size_t i = 0; i < amp.size(); ++i) {
+    const double a = std::abs(amp[i]);
+    if (a * std::abs(v.modes[i].gain) <= floor) {
+      if (a > 0) ++stats_.skipped;
+      continue;
+    }
+    if (pending_count_ == pending_.size()) {
+      throw std::length_error("excite: more excitations than one render can take; render first");
+    }
+    int32_t s = v.slot[i];
+    if (s < 0) {
+      const uint32_t got = allocate_slot();
+      if (got == ~0u) {  // budget exhausted even after stealing
+        ++stats_.skipped;
+        continue;
+      }
+      s = static_cast<int32_t>(got);
+      v.slot[i] = s;
+      slot_voice_[got] = id;
+      slot_mode_[got] = static_cast<uint32_t>(i);
+      const ModeSpec& m = v.modes[i];
+      const float gains[2] = {m.gain * v.pan[0], m.gain * v.pan[1]};
+      fb_.set_mode(got, pole(m.omega_d, m.decay, opt_.sample_rate), gains);
+      env_[got] = peak_[got] = 0.0f;
+      env_time_[got] = t;
+      rate_[got] = static_cast<float>(m.decay / opt_.sample_rate);
+    }
+    // Envelope bound: |z(t)| <= env * exp(-rate (t - env_time)); each kick adds its magnitude.
+    const double env =
+        env_[s] * std::exp(-double(rate_[s]) * double(t - env_time_[s])) + a;
+    env_[s] = static_cast<float>(env);
+    env_time_[s] = t;
+    peak_[s] = std::max(peak_[s], env_[s]);
+    // Retire when env exp(-rate dt) < peak * threshold.
+    const double ratio = env / (double(peak_[s]) * threshold_);
+    retire_at_[s] = rate_[s] > 0 ? t + static_cast<int64_t>(std::ceil(std::log(ratio) / rate_[s]))
+                                 : kNever;
+    pending_[pending_count_++] = Excitation{static_cast<uint32_t>(s), offset, amp[i].real(), amp[i].imag()};
+  }
+}
+
+void Synth::stop_voice(VoiceId id) {
+  Voice& v = voice(id);
+  for (int32_t s : v.slot) {
+    if (s >= 0) {
+      drop_pending(static_cast<uint32_t>(s));
+      free_slot(static_cast<uint32_t>(s));
+    }
+  }
+  v.alive = false;
+}
+
+void Synth::render(uint32_t frames, float* out) {
+  while (high_water_ > 0 && group_used_[high_water_ / kGroup - 1] == 0) high_water_ -= kGroup;
+  fb_.set_high_water(high_water_);
+  fb_.process(std::span(pending_.data(), pending_count_), frames, out);
+  pending_count_ = 0;
+  now_ += frames;
+  // Retire a round-robin share of the resident range (each slot is visited within ~8 renders).
+  const uint32_t range = high_water_;
+  const uint32_t scan = std::min(range, std::max<uint32_t>(4096, range / 8));
+  const int64_t now = static_cast<int64_t>(now_);
+  for (uint32_t k = 0; k < scan; ++k) {
+    if (scan_cursor_ >= range) scan_cursor_ = 0;
+    const uint32_t s = scan_cursor_++;
+    if (slot_voice_[s] >= 0 && retire_at_[s] <= now) {
+      free_slot(s);
+      ++stats_.retired;
+    }
+  }
+}
+
+}  // namespace chladni::runtime

@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs dependencies, builds Chladni twice (optimised, and Debug with AddressSanitizer +
+# UndefinedBehaviorSanitizer + Vulkan validation layers) and runs the whole test suite in each.
+# The GPU tests run on whatever Vulkan device is present; in CI that is Mesa lavapipe.
+# Usage: bash scripts/test.sh            (from the repository root, as root on Debian 12)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/deps.sh
+jobs=$(nproc)
+
+echo "== release build and tests"
+cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release
+cmake --build build/release -j "$jobs"
+ctest --test-dir build/release --output-on-failure -j "$jobs"
+
+echo "== sanitizer build (ASan + UBSan, Debug, Vulkan validation) and tests"
+cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCHLADNI_SANITIZE=ON \
+  -DCHLADNI_BUILD_BENCH=OFF "-DCMAKE_CXX_FLAGS_DEBUG=-g -O1"
+cmake --build build/asan -j "$jobs"
+# Mesa's shader compiler is not built with ASan; its leaks are not ours (see tests/lsan.supp).
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 \
+UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build/asan --output-on-failure -j "$jobs"
