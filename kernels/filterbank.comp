@@ -5,12 +5,15 @@
 // Each invocation advances MPI modes through `samples` samples; per sample the mode sum is
 // reduced across the subgroup and one row of partial sums per subgroup is written; reduce.comp
 // sums the rows. Excitations are sample-accurate: entries (slot, offset, re, im) sorted by slot,
-// then offset, are added right after the pole multiplication at their offset.
+// then offset, are added right after the pole multiplication at their offset. They split the
+// sample loop into segments so that the hot loop carries no per-sample test; segment bounds are
+// subgroup-uniform (subgroupMin) because emit() reduces across the subgroup, which is only
+// defined when every invocation of the subgroup is at the same sample.
 #extension GL_KHR_shader_subgroup_basic : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
 layout(local_size_x_id = 0) in;
-layout(constant_id = 1) const uint MPI = 4;       // modes per invocation
+layout(constant_id = 1) const uint MPI = 16;      // modes per invocation
 layout(constant_id = 2) const uint CHANNELS = 1;  // 1 or 2
 layout(constant_id = 3) const uint ROWS_PER_GROUP = 8;
 
@@ -28,6 +31,9 @@ layout(push_constant) uniform Push {
 
 const uint NONE = 0xffffffffu;
 
+float pr[MPI], pi[MPI], zr[MPI], zi[MPI], g0[MPI], g1[MPI];
+uint row_base;
+
 // First index in [0, exc_count) whose slot is >= slot.
 uint lower_bound(uint slot) {
   uint lo = 0, hi = pc.exc_count;
@@ -38,62 +44,86 @@ uint lower_bound(uint slot) {
   return lo;
 }
 
+// z <- p z for every mode of this invocation.
+void step() {
+  for (uint j = 0; j < MPI; ++j) {
+    float r = pr[j] * zr[j] - pi[j] * zi[j];
+    float i = pr[j] * zi[j] + pi[j] * zr[j];
+    zr[j] = r;
+    zi[j] = i;
+  }
+}
+
+// Output of sample n: sum of gain * Im(z), over the invocation, then the subgroup.
+void emit(uint n) {
+  float left = 0.0, right = 0.0;
+  for (uint j = 0; j < MPI; ++j) {
+    left += g0[j] * zi[j];
+    if (CHANNELS == 2) right += g1[j] * zi[j];
+  }
+  left = subgroupAdd(left);
+  if (CHANNELS == 2) right = subgroupAdd(right);
+  if (subgroupElect()) {
+    partial[(row_base + n) * CHANNELS] = left;
+    if (CHANNELS == 2) partial[(row_base + n) * CHANNELS + 1] = right;
+  }
+}
+
 void main() {
   const uint lid = gl_LocalInvocationID.x;
-  const uint group_modes = gl_WorkGroupSize.x * MPI;
-  const uint base = gl_WorkGroupID.x * group_modes;
+  const uint base = gl_WorkGroupID.x * gl_WorkGroupSize.x * MPI;
+  row_base = (gl_WorkGroupID.x * ROWS_PER_GROUP + gl_SubgroupID) * pc.samples;
 
-  vec2 p[MPI], z[MPI], g[MPI];
-  uint slot[MPI], next[MPI], stop[MPI];
+  uint next[MPI], stop[MPI];
   uint next_n = NONE;
   for (uint j = 0; j < MPI; ++j) {
-    slot[j] = base + j * gl_WorkGroupSize.x + lid;  // coalesced across the workgroup
-    p[j] = vec2(0.0); z[j] = vec2(0.0); g[j] = vec2(0.0);
+    const uint s = base + j * gl_WorkGroupSize.x + lid;  // coalesced across the workgroup
+    pr[j] = 0.0; pi[j] = 0.0; zr[j] = 0.0; zi[j] = 0.0; g0[j] = 0.0; g1[j] = 0.0;
     next[j] = 0; stop[j] = 0;
-    if (slot[j] < pc.mode_count) {
-      vec4 m = modes[slot[j]];
-      p[j] = m.xy; z[j] = m.zw; g[j] = gains[slot[j]];
+    if (s < pc.mode_count) {
+      const vec4 m = modes[s];
+      const vec2 g = gains[s];
+      pr[j] = m.x; pi[j] = m.y; zr[j] = m.z; zi[j] = m.w; g0[j] = g.x; g1[j] = g.y;
       if (pc.exc_count > 0) {
-        next[j] = lower_bound(slot[j]);
-        stop[j] = lower_bound(slot[j] + 1);
+        next[j] = lower_bound(s);
+        stop[j] = lower_bound(s + 1);
         if (next[j] < stop[j]) next_n = min(next_n, exc[next[j]].y);
       }
     }
   }
 
-  const uint row = gl_WorkGroupID.x * ROWS_PER_GROUP + gl_SubgroupID;
-  for (uint n = 0; n < pc.samples; ++n) {
-    for (uint j = 0; j < MPI; ++j) {
-      z[j] = vec2(p[j].x * z[j].x - p[j].y * z[j].y, p[j].x * z[j].y + p[j].y * z[j].x);
+  next_n = subgroupMin(next_n);
+  uint n = 0;
+  while (n < pc.samples) {
+    const uint seg_end = min(next_n, pc.samples);
+    for (; n < seg_end; ++n) {  // hot loop: no excitation in [n, seg_end)
+      step();
+      emit(n);
     }
-    if (n == next_n) {
-      next_n = NONE;
-      for (uint j = 0; j < MPI; ++j) {
-        while (next[j] < stop[j] && exc[next[j]].y == n) {
-          z[j] += uintBitsToFloat(exc[next[j]].zw);
-          ++next[j];
-        }
-        if (next[j] < stop[j]) next_n = min(next_n, exc[next[j]].y);
+    if (n == pc.samples) break;
+    // Sample n carries excitations of some invocation of the subgroup.
+    step();
+    uint mine = NONE;
+    for (uint j = 0; j < MPI; ++j) {
+      while (next[j] < stop[j] && exc[next[j]].y == n) {
+        const vec2 e = uintBitsToFloat(exc[next[j]].zw);
+        zr[j] += e.x;
+        zi[j] += e.y;
+        ++next[j];
       }
+      if (next[j] < stop[j]) mine = min(mine, exc[next[j]].y);
     }
-    float left = 0.0, right = 0.0;
-    for (uint j = 0; j < MPI; ++j) {
-      left += g[j].x * z[j].y;
-      if (CHANNELS == 2) right += g[j].y * z[j].y;
-    }
-    left = subgroupAdd(left);
-    if (CHANNELS == 2) right = subgroupAdd(right);
-    if (subgroupElect()) {
-      partial[(row * pc.samples + n) * CHANNELS] = left;
-      if (CHANNELS == 2) partial[(row * pc.samples + n) * CHANNELS + 1] = right;
-    }
+    next_n = subgroupMin(mine);
+    emit(n);
+    ++n;
   }
 
   for (uint j = 0; j < MPI; ++j) {
-    if (slot[j] < pc.mode_count) {
+    const uint s = base + j * gl_WorkGroupSize.x + lid;
+    if (s < pc.mode_count) {
       // Flush states far below audibility: no denormal guarantee on every device.
-      if (dot(z[j], z[j]) < 1e-30) z[j] = vec2(0.0);
-      modes[slot[j]] = vec4(p[j], z[j]);
+      if (zr[j] * zr[j] + zi[j] * zi[j] < 1e-30) { zr[j] = 0.0; zi[j] = 0.0; }
+      modes[s] = vec4(pr[j], pi[j], zr[j], zi[j]);
     }
   }
 }

@@ -43,6 +43,7 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
       high_water_(o.capacity),
       local_(o.workgroup_size),
       mpi_(o.modes_per_invocation) {
+
   static_assert(sizeof(Update) == 32, "matches apply_updates.comp");
   if (!ctx_) throw std::invalid_argument("GpuFilterbank needs a Vulkan context");
   if (capacity_ == 0) throw std::invalid_argument("filterbank capacity must be > 0");

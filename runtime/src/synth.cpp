@@ -227,7 +227,7 @@ void Synth::render(uint32_t frames, float* out) {
   pending_count_ = 0;
   now_ += frames;
   // Retire a round-robin share of the resident range (each slot is visited within ~8 renders).
-  const uint32_t range = high_water_;
+  const uint32_t range = std::min(high_water_, budget_);
   const uint32_t scan = std::min(range, std::max<uint32_t>(4096, range / 8));
   const int64_t now = static_cast<int64_t>(now_);
   for (uint32_t k = 0; k < scan; ++k) {

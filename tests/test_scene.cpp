@@ -1,0 +1,113 @@
+// Scene parsing: a good scene, and each kind of bad input named by its JSON path.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <nlohmann/json.hpp>
+
+#include "chladni/core/error.hpp"
+#include "chladni/core/scene.hpp"
+
+using namespace chladni;
+using nlohmann::json;
+
+namespace {
+
+json good() {
+  return json::parse(R"({
+    "sample_rate": 44100, "channels": 1,
+    "listener": {"position": [0, 0, 0]},
+    "objects": [
+      {"name": "bar", "position": [0, 1, 0], "bar": {"length": 0.3, "damping": "rayleigh:1,1e-9"}},
+      {"name": "cup", "modes": [{"frequency": 800, "decay": 3, "amplitude": 0.1}]}
+    ],
+    "events": [
+      {"time": 0.5, "type": "impact", "object": "cup", "impulse": 0.01},
+      {"time": 0.1, "type": "impact", "object": "bar", "impulse": 0.02, "vertex": 3,
+       "direction": [0, 0, -2], "contact_time": 0.001}
+    ]})");
+}
+
+std::string error_of(const json& j) {
+  try {
+    parse_scene(j, ".");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no error)";
+}
+
+}  // namespace
+
+TEST(Scene, ParsesAGoodSceneAndSortsEvents) {
+  const Scene s = parse_scene(good(), ".");
+  EXPECT_EQ(s.sample_rate, 44100);
+  EXPECT_EQ(s.channels, 1);
+  ASSERT_EQ(s.objects.size(), 2u);
+  EXPECT_EQ(s.objects[0].source, SceneObject::Source::Bar);
+  EXPECT_DOUBLE_EQ(s.objects[0].bar.damping.alpha[1], 1e-9);
+  ASSERT_EQ(s.events.size(), 2u);
+  EXPECT_DOUBLE_EQ(s.events[0].time, 0.1);  // sorted
+  EXPECT_EQ(s.events[0].object, 0u);
+  EXPECT_EQ(*s.events[0].vertex, 3u);
+  EXPECT_NEAR(s.events[0].direction[2], -1.0, 1e-12);  // normalized
+}
+
+TEST(Scene, NamesTheJsonPathOfEachProblem) {
+  struct Case {
+    std::function<void(json&)> edit;
+    std::string expect;
+  };
+  const std::vector<Case> cases = {
+      {[](json& j) { j["events"][0].erase("time"); }, "$.events[0]: missing required field 'time'"},
+      {[](json& j) { j["events"][1]["time"] = -1; }, "$.events[1].time: must be >= 0"},
+      {[](json& j) { j["events"][0]["object"] = "plate"; }, "$.events[0].object: unknown object 'plate'"},
+      {[](json& j) { j["events"][0]["impulse"] = "hard"; }, "$.events[0].impulse: expected a number, got string"},
+      {[](json& j) { j["events"][0]["impluse"] = 1; }, "$.events[0]: unknown field 'impluse'"},
+      {[](json& j) { j["events"][0]["type"] = "scrape"; }, "$.events[0].type: unknown event type 'scrape'"},
+      {[](json& j) { j["objects"][1]["modes"][0]["frequency"] = std::numeric_limits<double>::infinity(); }, "$.objects[1].modes[0].frequency: must be finite"},
+      {[](json& j) { j["objects"][1]["modes"][0]["decay"] = -3; }, "$.objects[1].modes[0].decay: must be >= 0"},
+      {[](json& j) { j["objects"][1]["name"] = "bar"; }, "$.objects[1].name: duplicate name 'bar'"},
+      {[](json& j) { j["objects"][0]["bar"]["poisson_ratio"] = 0.7; }, "$.objects[0].bar.poisson_ratio: must lie in (-1, 0.5)"},
+      {[](json& j) { j["objects"][0]["bar"]["damping"] = "viscous:1"; }, "$.objects[0].bar.damping: damping 'viscous:1': unknown model"},
+      {[](json& j) { j["objects"][1]["bar"] = json::object(); }, "$.objects[1]: needs exactly one of"},
+      {[](json& j) { j["listener"]["position"] = json::array({0, 1}); }, "$.listener.position: expected an array of 3 numbers"},
+      {[](json& j) { j["events"][1]["direction"] = json::array({0, 0, 0}); }, "$.events[1].direction: must be a non-zero vector"},
+      {[](json& j) { j["channels"] = 3; }, "$.channels: must be 1 or 2"},
+      {[](json& j) { j.erase("objects"); }, "$: missing required field 'objects'"},
+      {[](json& j) { j["events"] = json::object(); }, "$.events: expected an array, got object"},
+  };
+  for (const Case& c : cases) {
+    json j = good();
+    c.edit(j);
+    const std::string err = error_of(j);
+    EXPECT_NE(err.find(c.expect), std::string::npos) << "got: " << err << "\nwant: " << c.expect;
+  }
+}
+
+TEST(Scene, SyntaxErrorsNameFileLineAndColumn) {
+  const auto path = std::filesystem::temp_directory_path() / "chladni_bad_scene.json";
+  {
+    std::ofstream f(path);
+    f << "{\n  \"objects\": [\n    {\"name\": \"a\", \"modes\": [NaN]}\n  ]\n}\n";
+  }
+  try {
+    load_scene(path.string());
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path.string() + ":3:"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("syntax error"), std::string::npos) << msg;
+  }
+  EXPECT_THROW(load_scene("/nonexistent/scene.json"), InputError);
+}
+
+TEST(Scene, ResolvesSoundbankPathsAgainstTheSceneFolder) {
+  json j = good();
+  j["objects"][1].erase("modes");
+  j["objects"][1]["soundbank"] = "banks/cup.chbank";
+  const Scene s = parse_scene(j, "/data/scenes");
+  EXPECT_EQ(s.objects[1].soundbank, "/data/scenes/banks/cup.chbank");
+}

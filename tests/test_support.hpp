@@ -1,0 +1,31 @@
+#pragma once
+// Shared helpers: GPU availability (tests skip without a Vulkan device unless
+// CHLADNI_REQUIRE_GPU=1, which the CI sets so that the GPU path is really tested).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <memory>
+
+#include "chladni/gpu/context.hpp"
+
+namespace chladni::test {
+
+inline std::shared_ptr<gpu::Context> gpu_context() {
+  static std::shared_ptr<gpu::Context> ctx = []() -> std::shared_ptr<gpu::Context> {
+    try {
+      return std::make_shared<gpu::Context>();
+    } catch (const gpu::NoDeviceError& e) {
+      if (const char* req = std::getenv("CHLADNI_REQUIRE_GPU"); req && std::string(req) == "1") {
+        ADD_FAILURE() << "CHLADNI_REQUIRE_GPU=1 but no Vulkan device: " << e.what();
+      }
+      return nullptr;
+    }
+  }();
+  return ctx;
+}
+
+#define CHLADNI_REQUIRE_GPU_OR_SKIP(ctx)                       \
+  auto ctx = ::chladni::test::gpu_context();                   \
+  if (!ctx) GTEST_SKIP() << "no Vulkan device on this machine"
+
+}  // namespace chladni::test
