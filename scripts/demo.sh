@@ -9,7 +9,9 @@ cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DCHLADNI_BUILD_
   -DCHLADNI_BUILD_BENCH=OFF
 cmake --build build/release --target chladni -j "$jobs"
 mkdir -p out
-# Analytic struck steel bar (Euler-Bernoulli modes) until the precompute pipeline lands.
-./build/release/cli/chladni demo -o out/struck_bar.wav
-./build/release/cli/chladni render examples/two_bars.json -o out/two_bars.wav
-echo "demo: wrote out/struck_bar.wav and out/two_bars.wav"
+# A struck steel bar (analytic Euler-Bernoulli modes, until the precompute pipeline lands) and a
+# glass, rendered on the CPU reference and on the GPU filterbank (Vulkan; lavapipe without a GPU).
+./build/release/cli/chladni render examples/struck_bar.json -o out/struck_bar.wav --normalize -1
+./build/release/cli/chladni render examples/struck_bar.json -o out/struck_bar_gpu.wav --normalize -1 \
+  --backend gpu --block 1024
+echo "demo: wrote out/struck_bar.wav and out/struck_bar_gpu.wav"

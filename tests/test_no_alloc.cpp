@@ -1,0 +1,61 @@
+// The audio path allocates nothing: a binary of its own, because it replaces the global
+// allocation functions to count calls (and must not share a process with Vulkan layers).
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <new>
+#include <numbers>
+
+#include "chladni/runtime/cpu_filterbank.hpp"
+#include "chladni/runtime/synth.hpp"
+
+namespace {
+std::atomic<bool> g_count{false};
+std::atomic<long> g_allocs{0};
+void* counted(std::size_t n) {
+  if (g_count.load(std::memory_order_relaxed)) g_allocs.fetch_add(1);
+  if (void* p = std::malloc(n ? n : 1)) return p;
+  throw std::bad_alloc();
+}
+}  // namespace
+
+void* operator new(std::size_t n) { return counted(n); }
+void* operator new[](std::size_t n) { return counted(n); }
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+
+using namespace chladni::runtime;
+
+namespace {
+ModeSpec mode(double hz, double decay, float gain = 1) {
+  return {2 * std::numbers::pi * hz, decay, gain};
+}
+constexpr double kFs = 48000;
+}  // namespace
+
+TEST(Synth, RenderAndExciteDoNotAllocate) {
+  CpuFilterbank fb({.capacity = 4096, .channels = 2, .threads = 2});
+  Synth synth(fb, {.sample_rate = kFs, .max_modes = 1024});
+  std::vector<ModeSpec> modes;
+  for (int i = 0; i < 2000; ++i) modes.push_back(mode(50 + 7 * i, 5.0 + i % 7));
+  const auto v = synth.start_voice(modes);
+  std::vector<std::complex<float>> amp(modes.size(), {1.0f, 0.5f});
+  std::vector<float> out(256 * 2);
+  synth.excite(v, amp, 3);  // warm-up: first use of every path
+  synth.render(256, out.data());
+  g_allocs = 0;
+  g_count = true;
+  for (int b = 0; b < 200; ++b) {
+    if (b % 20 == 0) synth.excite(v, amp, static_cast<uint32_t>(b % 256));  // steals too
+    synth.set_pan(v, 0.3f, 0.9f);
+    synth.render(256, out.data());
+  }
+  g_count = false;
+  EXPECT_EQ(g_allocs.load(), 0);
+  EXPECT_GT(synth.stats().stolen, 0u);
+}
+
