@@ -23,8 +23,9 @@ void fill(Filterbank& fb, uint32_t n) {
   for (uint32_t s = 0; s < n; ++s) kick.push_back({s, 0, 1.0f, 0.0f});
   std::vector<float> out(fb.max_frames() * fb.channels());
   for (std::size_t k = 0; k < kick.size(); k += fb.max_excitations()) {
-    fb.process(std::span(kick.data() + k, std::min<std::size_t>(fb.max_excitations(), kick.size() - k)),
-               256, out.data());
+    fb.process(
+        std::span(kick.data() + k, std::min<std::size_t>(fb.max_excitations(), kick.size() - k)),
+        256, out.data());
   }
 }
 

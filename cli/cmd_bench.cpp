@@ -36,7 +36,8 @@ std::vector<std::string> split(const std::string& s) {
 double percentile(std::vector<double> v, double q) {
   if (v.empty()) return 0;
   std::sort(v.begin(), v.end());
-  const std::size_t k = std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(q * v.size())) - 1);
+  const std::size_t k =
+      std::min(v.size() - 1, static_cast<std::size_t>(std::ceil(q * v.size())) - 1);
   return v[k];
 }
 
@@ -50,7 +51,8 @@ struct Record {
 
 // Times calls of `frames` frames until `seconds` have passed (at least `min_calls`).
 std::vector<double> time_calls(runtime::Filterbank& fb, uint32_t frames, double seconds,
-                               int min_calls, std::vector<float>& out, std::vector<double>* gpu_ms) {
+                               int min_calls, std::vector<float>& out,
+                               std::vector<double>* gpu_ms) {
   using clock = std::chrono::steady_clock;
   std::vector<double> ms;
   const auto start = clock::now();
@@ -127,8 +129,8 @@ void run_bench(const BenchArgs& a) {
   if (a.block == 0 || a.batch == 0 || !(a.seconds > 0)) {
     throw InputError("--block, --batch and --seconds must be > 0");
   }
-  std::printf("%-4s %9s %12s %14s %10s %10s %10s  %s\n", "", "modes", "mode-smp/s", "realtime modes",
-              "p50 ms", "p99 ms", "gpu ms", "device");
+  std::printf("%-4s %9s %12s %14s %10s %10s %10s  %s\n", "", "modes", "mode-smp/s",
+              "realtime modes", "p50 ms", "p99 ms", "gpu ms", "device");
   nlohmann::json out = nlohmann::json::array();
   for (uint32_t n : sizes) {
     for (const std::string& b : backends) {
@@ -137,11 +139,18 @@ void run_bench(const BenchArgs& a) {
                   r.mode_samples_per_s, r.realtime_modes, r.block_ms_p50, r.block_ms_p99,
                   r.gpu_block_ms_p50, r.device.c_str());
       std::fflush(stdout);
-      out.push_back({{"backend", r.backend}, {"device", r.device}, {"modes", r.modes},
-                     {"threads", r.threads}, {"mode_samples_per_s", r.mode_samples_per_s},
-                     {"realtime_modes", r.realtime_modes}, {"block_ms_p50", r.block_ms_p50},
-                     {"block_ms_p99", r.block_ms_p99}, {"gpu_block_ms_p50", r.gpu_block_ms_p50},
-                     {"block", r.block}, {"batch", r.batch}, {"sample_rate", a.sample_rate}});
+      out.push_back({{"backend", r.backend},
+                     {"device", r.device},
+                     {"modes", r.modes},
+                     {"threads", r.threads},
+                     {"mode_samples_per_s", r.mode_samples_per_s},
+                     {"realtime_modes", r.realtime_modes},
+                     {"block_ms_p50", r.block_ms_p50},
+                     {"block_ms_p99", r.block_ms_p99},
+                     {"gpu_block_ms_p50", r.gpu_block_ms_p50},
+                     {"block", r.block},
+                     {"batch", r.batch},
+                     {"sample_rate", a.sample_rate}});
     }
   }
   if (!a.json_path.empty()) {

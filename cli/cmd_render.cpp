@@ -42,11 +42,12 @@ void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>
           throw InputError(obj.json_path + ".bar: no mode lies in the audible band");
         }
         if (!quiet) {
-          std::printf("  %-12s analytic bar %.3f x %.3f x %.3f m, %s: %zu modes (%zu overdamped, "
-                      "%zu out of band); lowest",
-                      obj.name.c_str(), obj.bar.length, obj.bar.width, obj.bar.thickness,
-                      obj.bar.damping.to_string().c_str(), model->mode_count(), sel.overdamped,
-                      sel.below_band + sel.above_band);
+          std::printf(
+              "  %-12s analytic bar %.3f x %.3f x %.3f m, %s: %zu modes (%zu overdamped, "
+              "%zu out of band); lowest",
+              obj.name.c_str(), obj.bar.length, obj.bar.width, obj.bar.thickness,
+              obj.bar.damping.to_string().c_str(), model->mode_count(), sel.overdamped,
+              sel.below_band + sel.above_band);
           for (std::size_t i = 0; i < std::min<std::size_t>(5, model->mode_count()); ++i) {
             std::printf(" %.1f", model->damped_omega(i) / (2 * std::numbers::pi));
           }
@@ -74,12 +75,16 @@ void run_render(const RenderArgs& a) {
   }
   if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
   SampleFormat format = SampleFormat::Float32;
-  if (a.format == "pcm24") format = SampleFormat::Pcm24;
-  else if (a.format == "pcm16") format = SampleFormat::Pcm16;
-  else if (a.format != "float") throw InputError("--format must be float, pcm24 or pcm16");
+  if (a.format == "pcm24")
+    format = SampleFormat::Pcm24;
+  else if (a.format == "pcm16")
+    format = SampleFormat::Pcm16;
+  else if (a.format != "float")
+    throw InputError("--format must be float, pcm24 or pcm16");
 
-  if (!a.quiet) std::printf("scene %s: %zu objects, %zu events\n", a.scene.c_str(),
-                            scene.objects.size(), scene.events.size());
+  if (!a.quiet)
+    std::printf("scene %s: %zu objects, %zu events\n", a.scene.c_str(), scene.objects.size(),
+                scene.events.size());
   std::vector<std::unique_ptr<ModalModel>> models;
   std::vector<runtime::ObjectModes> objects;
   resolve_objects(scene, models, objects, a.quiet);
@@ -91,8 +96,9 @@ void run_render(const RenderArgs& a) {
   req.channels = scene.channels;
   req.threads = a.threads;
   req.isa = a.isa;
-  req.capacity = a.max_modes ? a.max_modes
-                             : static_cast<uint32_t>(std::clamp<std::size_t>(total_modes, 1024, 1u << 20));
+  req.capacity = a.max_modes
+                     ? a.max_modes
+                     : static_cast<uint32_t>(std::clamp<std::size_t>(total_modes, 1024, 1u << 20));
   req.max_frames = std::max<uint32_t>(a.block, 256);
   auto fb = make_filterbank(req);
 
@@ -104,20 +110,23 @@ void run_render(const RenderArgs& a) {
   AudioBuffer audio = runtime::render_scene(scene, objects, *fb, ro, &rep);
 
   double gain = 1.0;
-  if (!std::isnan(a.normalize_db) && rep.peak > 0) gain = std::pow(10.0, a.normalize_db / 20.0) / rep.peak;
-  if (gain != 1.0) for (float& x : audio.samples) x = static_cast<float>(x * gain);
+  if (!std::isnan(a.normalize_db) && rep.peak > 0)
+    gain = std::pow(10.0, a.normalize_db / 20.0) / rep.peak;
+  if (gain != 1.0)
+    for (float& x : audio.samples) x = static_cast<float>(x * gain);
   write_wav(a.output, audio, format);
 
   const double secs = double(rep.frames) / scene.sample_rate;
   if (!a.quiet) {
     std::printf("backend %s, block %u, %d Hz, %d channel%s\n", fb->name().c_str(), a.block,
                 scene.sample_rate, scene.channels, scene.channels == 2 ? "s" : "");
-    std::printf("rendered %.3f s in %.3f s (%.1fx real time); peak %.4g%s; modes: %u resident at most, "
-                "%llu retired, %llu stolen\n",
-                secs, rep.seconds, rep.seconds > 0 ? secs / rep.seconds : 0.0, rep.peak,
-                std::isnan(a.normalize_db) ? " Pa" : " Pa before normalization",
-                rep.max_active_modes, static_cast<unsigned long long>(rep.stats.retired),
-                static_cast<unsigned long long>(rep.stats.stolen));
+    std::printf(
+        "rendered %.3f s in %.3f s (%.1fx real time); peak %.4g%s; modes: %u resident at most, "
+        "%llu retired, %llu stolen\n",
+        secs, rep.seconds, rep.seconds > 0 ? secs / rep.seconds : 0.0, rep.peak,
+        std::isnan(a.normalize_db) ? " Pa" : " Pa before normalization", rep.max_active_modes,
+        static_cast<unsigned long long>(rep.stats.retired),
+        static_cast<unsigned long long>(rep.stats.stolen));
     std::printf("wrote %s\n", a.output.c_str());
   }
   if (std::isnan(a.normalize_db) && rep.peak > 1.0 && format != SampleFormat::Float32) {
@@ -144,7 +153,8 @@ void add_render(CLI::App& app) {
   cmd->add_option("--retire-db", a->retire_db, "Retire modes this far below their peak (dB)")
       ->capture_default_str();
   cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)");
-  cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")->capture_default_str();
+  cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")
+      ->capture_default_str();
   cmd->add_flag("-q,--quiet", a->quiet, "Print nothing but errors");
   cmd->callback([a] { run_render(*a); });
 }

@@ -40,7 +40,8 @@ std::string write_file(const std::string& name, const std::string& text) {
 
 TEST(Cli, RendersTheExampleSceneToAWav) {
   const std::string out = temp("chladni_cli_example.wav");
-  const Result r = run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + out + " --normalize -1");
+  const Result r =
+      run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + out + " --normalize -1");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("576.5"), std::string::npos) << r.output;  // the bar's first mode
   const chladni::AudioBuffer a = chladni::read_audio(out);
@@ -64,7 +65,10 @@ TEST(Cli, MalformedSceneExitsWith2AndNamesTheJsonPath) {
 
 TEST(Cli, BadArgumentsExitWith2) {
   EXPECT_EQ(run("render").code, 2);
-  EXPECT_EQ(run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + temp("x.wav") + " --backend tpu").code, 2);
+  EXPECT_EQ(run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + temp("x.wav") +
+                " --backend tpu")
+                .code,
+            2);
   EXPECT_EQ(run("render /nonexistent.json -o " + temp("x.wav")).code, 2);
   EXPECT_EQ(run("bench --modes 10,abc").code, 2);
   EXPECT_EQ(run("no-such-command").code, 2);
@@ -92,7 +96,8 @@ TEST(Cli, MissingVulkanDeviceFallsBackToCpuWithOneWarning) {
 
 TEST(Cli, BenchJsonHasEveryFieldForEveryBackend) {
   const std::string json_path = temp("chladni_bench.json");
-  const Result r = run("bench --modes 1000,4000 --backend cpu,gpu --seconds 0.05 --json " + json_path);
+  const Result r =
+      run("bench --modes 1000,4000 --backend cpu,gpu --seconds 0.05 --json " + json_path);
   ASSERT_EQ(r.code, 0) << r.output;
   std::ifstream f(json_path);
   const nlohmann::json j = nlohmann::json::parse(f);

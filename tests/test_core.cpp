@@ -46,15 +46,17 @@ TEST(ModalModel, DampingDropsAndCountsOverdampedAndOutOfBandModes) {
     m.radiation.push_back(1);
   }
   // Rayleigh with a large stiffness term overdamps the top mode (d = 1e-5 w^2 > w there).
-  const ModeSelection sel = apply_damping(m, DampingModel::parse("rayleigh:0,2e-5"), 20, 20000, 48000);
-  EXPECT_EQ(sel.below_band, 1u);    // 10 Hz
-  EXPECT_EQ(sel.overdamped, 1u);    // 30 kHz: d = 1e-5 w^2 = 355306 > w = 188496
+  const ModeSelection sel =
+      apply_damping(m, DampingModel::parse("rayleigh:0,2e-5"), 20, 20000, 48000);
+  EXPECT_EQ(sel.below_band, 1u);  // 10 Hz
+  EXPECT_EQ(sel.overdamped, 1u);  // 30 kHz: d = 1e-5 w^2 = 355306 > w = 188496
   EXPECT_EQ(sel.above_band, 0u);
   ASSERT_EQ(sel.kept, (std::vector<std::size_t>{1, 2, 3}));
   EXPECT_NEAR(m.decay[2], 0.5 * 2e-5 * m.omega[2] * m.omega[2], 1e-9);
   keep_modes(m, sel.kept);
   EXPECT_EQ(m.mode_count(), 3u);
-  EXPECT_NEAR(m.damped_omega(0), std::sqrt(m.omega[0] * m.omega[0] - m.decay[0] * m.decay[0]), 1e-9);
+  EXPECT_NEAR(m.damped_omega(0), std::sqrt(m.omega[0] * m.omega[0] - m.decay[0] * m.decay[0]),
+              1e-9);
 }
 
 TEST(ModalModel, ValidationNamesTheBadMode) {
@@ -80,7 +82,8 @@ TEST(AudioFile, WavRoundTripsFloatAndPcm) {
     a.samples.push_back(-0.25f * std::cos(0.02f * i));
   }
   const auto dir = std::filesystem::temp_directory_path();
-  const std::string f32 = (dir / "chladni_rt_f32.wav").string(), p24 = (dir / "chladni_rt_p24.wav").string();
+  const std::string f32 = (dir / "chladni_rt_f32.wav").string(),
+                    p24 = (dir / "chladni_rt_p24.wav").string();
   write_wav(f32, a, SampleFormat::Float32);
   write_wav(p24, a, SampleFormat::Pcm24);
   const AudioBuffer b = read_audio(f32), c = read_audio(p24);

@@ -21,8 +21,8 @@ std::vector<std::unique_ptr<Filterbank>> all_backends(uint32_t capacity, int cha
   std::vector<std::unique_ptr<Filterbank>> out;
   for (CpuIsa isa : {CpuIsa::Scalar, CpuIsa::Avx2, CpuIsa::Avx512}) {
     if (!CpuFilterbank::supports(isa)) continue;
-    out.push_back(std::make_unique<CpuFilterbank>(
-        CpuFilterbankOptions{.capacity = capacity, .channels = channels, .threads = 2, .isa = isa}));
+    out.push_back(std::make_unique<CpuFilterbank>(CpuFilterbankOptions{
+        .capacity = capacity, .channels = channels, .threads = 2, .isa = isa}));
   }
   if (auto ctx = test::gpu_context()) {
     out.push_back(std::make_unique<GpuFilterbank>(
@@ -50,7 +50,8 @@ TEST(Filterbank, ImpulseResponseMatchesClosedForm) {
       fb->process(exc, block, out.data());
       for (uint32_t i = 0; i < block; ++i) {
         const double n = double(b * block + i);
-        const double expect = n < k0 ? 0.0 : A * std::exp(-d * (n - k0) / kFs) * std::sin(wd * (n - k0) / kFs);
+        const double expect =
+            n < k0 ? 0.0 : A * std::exp(-d * (n - k0) / kFs) * std::sin(wd * (n - k0) / kFs);
         worst = std::max(worst, std::abs(out[i] - expect));
       }
     }
@@ -71,7 +72,8 @@ TEST(Filterbank, SeveralExcitationsInOneBlockAndStereoGains) {
     fb->process(exc, 512, out.data());
     for (uint32_t n = 0; n < 512; ++n) {
       std::complex<double> z = 0;
-      if (n >= 10) z += std::complex<double>(0, 1) * std::exp(std::complex<double>(-d, wd) * ((n - 10) / kFs));
+      if (n >= 10)
+        z += std::complex<double>(0, 1) * std::exp(std::complex<double>(-d, wd) * ((n - 10) / kFs));
       if (n >= 300) z += std::exp(std::complex<double>(-d, wd) * ((n - 300) / kFs));
       EXPECT_NEAR(out[2 * n], 0.5 * z.imag(), 1e-5) << "left, n=" << n;
       EXPECT_NEAR(out[2 * n + 1], -2.0 * z.imag(), 4e-5) << "right, n=" << n;
@@ -124,7 +126,8 @@ void random_run(Filterbank& fb, uint32_t modes, uint32_t block, uint32_t blocks,
   for (uint32_t b = 0; b < blocks; ++b) {
     std::vector<Excitation> exc;
     if (b == 0) {
-      for (uint32_t s = 0; s < modes; ++s) exc.push_back({s, off(rng), float(amp(rng)), float(amp(rng))});
+      for (uint32_t s = 0; s < modes; ++s)
+        exc.push_back({s, off(rng), float(amp(rng)), float(amp(rng))});
     } else if (b % 50 == 0) {
       for (int k = 0; k < 500; ++k) exc.push_back({slot(rng), off(rng), float(amp(rng)), 0.0f});
     }

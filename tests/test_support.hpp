@@ -24,8 +24,8 @@ inline std::shared_ptr<gpu::Context> gpu_context() {
   return ctx;
 }
 
-#define CHLADNI_REQUIRE_GPU_OR_SKIP(ctx)                       \
-  auto ctx = ::chladni::test::gpu_context();                   \
+#define CHLADNI_REQUIRE_GPU_OR_SKIP(ctx)     \
+  auto ctx = ::chladni::test::gpu_context(); \
   if (!ctx) GTEST_SKIP() << "no Vulkan device on this machine"
 
 }  // namespace chladni::test

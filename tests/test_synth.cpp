@@ -68,7 +68,8 @@ TEST(Synth, StealsTheLeastAudibleModesWhenTheBudgetIsFull) {
   synth.excite(b, b_amp, 0);
   EXPECT_EQ(synth.active_modes(), 8u);
   EXPECT_EQ(synth.stats().stolen, 3u);
-  for (int i = 0; i < 5; ++i) EXPECT_GE(synth.slot_of(a, i), 0) << "loud mode " << i << " was stolen";
+  for (int i = 0; i < 5; ++i)
+    EXPECT_GE(synth.slot_of(a, i), 0) << "loud mode " << i << " was stolen";
   for (int i = 5; i < 8; ++i) EXPECT_EQ(synth.slot_of(a, i), -1) << "quiet mode " << i << " kept";
   for (int i = 0; i < 3; ++i) EXPECT_GE(synth.slot_of(b, i), 0);
 }
@@ -109,7 +110,8 @@ Scene test_scene(int channels) {
   SceneObject a;
   a.name = "a";
   a.position = {-1, 1, 0};
-  for (int i = 0; i < 300; ++i) a.modes.push_back({100.0 + 53.0 * i, 2.0 + i % 11, 0.01 * (1 + i % 5)});
+  for (int i = 0; i < 300; ++i)
+    a.modes.push_back({100.0 + 53.0 * i, 2.0 + i % 11, 0.01 * (1 + i % 5)});
   SceneObject b = a;
   b.name = "b";
   b.position = {2, 0.5, 0};
@@ -179,7 +181,8 @@ TEST(Render, PanFollowsTheObjectsSide) {
 }
 
 TEST(Render, SubSampleEventTimeShiftsPhaseExactly) {
-  // One undamped-ish mode hit at t = 0.5 / fs must equal the analytic sine delayed by half a sample.
+  // One undamped-ish mode hit at t = 0.5 / fs must equal the analytic sine delayed by half a
+  // sample.
   Scene s;
   s.channels = 1;
   s.duration = 0.05;

@@ -11,10 +11,14 @@ namespace {
 
 const char* kind_name(DampingModel::Kind k) {
   switch (k) {
-    case DampingModel::Kind::Rayleigh: return "rayleigh";
-    case DampingModel::Kind::Caughey: return "caughey";
-    case DampingModel::Kind::PowerLaw: return "power";
-    case DampingModel::Kind::Hybrid: return "hybrid";
+    case DampingModel::Kind::Rayleigh:
+      return "rayleigh";
+    case DampingModel::Kind::Caughey:
+      return "caughey";
+    case DampingModel::Kind::PowerLaw:
+      return "power";
+    case DampingModel::Kind::Hybrid:
+      return "hybrid";
   }
   return "?";
 }
@@ -42,8 +46,10 @@ double DampingModel::coefficient(double omega) const {
   const double x = omega * omega;
   double c = 0.0;
   switch (kind) {
-    case Kind::Rayleigh: c = alpha[0] + alpha[1] * x; break;  // beta(x) = a1 + a2 x
-    case Kind::Caughey: {                                      // beta(x) = sum_j a_j x^(j-1)
+    case Kind::Rayleigh:
+      c = alpha[0] + alpha[1] * x;
+      break;               // beta(x) = a1 + a2 x
+    case Kind::Caughey: {  // beta(x) = sum_j a_j x^(j-1)
       double xp = 1.0;
       for (double a : alpha) {
         c += a * xp;
@@ -51,7 +57,9 @@ double DampingModel::coefficient(double omega) const {
       }
       break;
     }
-    case Kind::PowerLaw: c = alpha[0] * std::pow(x, alpha[1]); break;  // beta(x) = a1 x^a2
+    case Kind::PowerLaw:
+      c = alpha[0] * std::pow(x, alpha[1]);
+      break;  // beta(x) = a1 x^a2
     case Kind::Hybrid:
       c = alpha[0] + alpha[1] * x + alpha[2] * std::pow(x, alpha[3]);
       break;
@@ -73,11 +81,17 @@ DampingModel DampingModel::parse(std::string_view text) {
   }
   const std::string_view name = text.substr(0, colon);
   DampingModel m;
-  if (name == "rayleigh") m.kind = Kind::Rayleigh;
-  else if (name == "caughey") m.kind = Kind::Caughey;
-  else if (name == "power") m.kind = Kind::PowerLaw;
-  else if (name == "hybrid") m.kind = Kind::Hybrid;
-  else throw InputError("damping '" + std::string(text) + "': unknown model '" + std::string(name) + "'");
+  if (name == "rayleigh")
+    m.kind = Kind::Rayleigh;
+  else if (name == "caughey")
+    m.kind = Kind::Caughey;
+  else if (name == "power")
+    m.kind = Kind::PowerLaw;
+  else if (name == "hybrid")
+    m.kind = Kind::Hybrid;
+  else
+    throw InputError("damping '" + std::string(text) + "': unknown model '" + std::string(name) +
+                     "'");
   m.alpha.clear();
   std::string_view rest = text.substr(colon + 1);
   while (!rest.empty()) {

@@ -33,8 +33,8 @@ void ModalModel::validate() const {
                      std::to_string(radiation.size()) + " radiation gains");
   }
   for (std::size_t i = 0; i < n; ++i) {
-    if (!std::isfinite(omega[i]) || omega[i] <= 0.0 || !std::isfinite(decay[i]) ||
-        decay[i] < 0.0 || !std::isfinite(radiation[i])) {
+    if (!std::isfinite(omega[i]) || omega[i] <= 0.0 || !std::isfinite(decay[i]) || decay[i] < 0.0 ||
+        !std::isfinite(radiation[i])) {
       throw InputError(who + ": mode " + std::to_string(i) +
                        " has a non-finite or out-of-range frequency, decay or radiation gain");
     }
@@ -50,7 +50,8 @@ void ModalModel::validate() const {
     return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
   };
   for (std::size_t v = 0; v < points.size(); ++v) {
-    if (!finite3(points[v])) throw InputError(who + ": point " + std::to_string(v) + " is not finite");
+    if (!finite3(points[v]))
+      throw InputError(who + ": point " + std::to_string(v) + " is not finite");
   }
   for (std::size_t k = 0; k < shapes.size(); ++k) {
     if (!finite3(shapes[k])) {
@@ -74,9 +75,12 @@ ModeSelection apply_damping(ModalModel& model, const DampingModel& damping, doub
       continue;
     }
     const double f = model.damped_omega(i) / (2.0 * std::numbers::pi);
-    if (f < min_hz) ++sel.below_band;
-    else if (f > top_hz) ++sel.above_band;
-    else sel.kept.push_back(i);
+    if (f < min_hz)
+      ++sel.below_band;
+    else if (f > top_hz)
+      ++sel.above_band;
+    else
+      sel.kept.push_back(i);
   }
   return sel;
 }

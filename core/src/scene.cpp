@@ -208,7 +208,8 @@ Scene parse_scene(const json& j, const std::string& base_dir) {
   }
   if (root.has("duration")) {
     s.duration = root.number("duration");
-    if (!(*s.duration > 0) || *s.duration > 3600) fail(root.at("duration"), "must lie in (0, 3600]");
+    if (!(*s.duration > 0) || *s.duration > 3600)
+      fail(root.at("duration"), "must lie in (0, 3600]");
   }
   s.gain = root.non_negative("gain", 1.0);
   if (root.has("listener")) {
@@ -226,7 +227,8 @@ Scene parse_scene(const json& j, const std::string& base_dir) {
   for (std::size_t i = 0; i < objects.size(); ++i) {
     SceneObject obj = parse_object(Obj(objects[i], index_path("$.objects", i)), base_dir);
     for (const SceneObject& other : s.objects) {
-      if (other.name == obj.name) fail(obj.json_path + ".name", "duplicate name '" + obj.name + "'");
+      if (other.name == obj.name)
+        fail(obj.json_path + ".name", "duplicate name '" + obj.name + "'");
     }
     s.objects.push_back(std::move(obj));
   }
@@ -253,8 +255,10 @@ Scene load_scene(const std::string& path) {
     // Turn the byte offset into a line and column a person can find.
     std::size_t line = 1, col = 1;
     for (std::size_t k = 0; k + 1 < e.byte && k < text.size(); ++k) {
-      if (text[k] == '\n') ++line, col = 1;
-      else ++col;
+      if (text[k] == '\n')
+        ++line, col = 1;
+      else
+        ++col;
     }
     throw InputError(path + ":" + std::to_string(line) + ":" + std::to_string(col) +
                      ": JSON syntax error: " + e.what());

@@ -19,11 +19,16 @@ std::string lower(std::string s) {
 
 int type_rank(VkPhysicalDeviceType t) {
   switch (t) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
-    default: return 4;
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return 0;
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return 1;
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return 2;
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return 3;
+    default:
+      return 4;
   }
 }
 
@@ -32,8 +37,9 @@ bool has_layer(const char* name) {
   if (vkEnumerateInstanceLayerProperties(&n, nullptr) != VK_SUCCESS) return false;
   std::vector<VkLayerProperties> layers(n);
   vkEnumerateInstanceLayerProperties(&n, layers.data());
-  return std::any_of(layers.begin(), layers.end(),
-                     [&](const VkLayerProperties& l) { return std::strcmp(l.layerName, name) == 0; });
+  return std::any_of(layers.begin(), layers.end(), [&](const VkLayerProperties& l) {
+    return std::strcmp(l.layerName, name) == 0;
+  });
 }
 
 bool has_instance_extension(const char* name) {
@@ -114,7 +120,8 @@ std::vector<Candidate> candidates(VkInstance instance) {
 const char* result_name(VkResult r) {
   switch (r) {
 #define CHLADNI_CASE(x) \
-  case x: return #x;
+  case x:               \
+    return #x;
     CHLADNI_CASE(VK_SUCCESS)
     CHLADNI_CASE(VK_NOT_READY)
     CHLADNI_CASE(VK_TIMEOUT)
@@ -132,7 +139,8 @@ const char* result_name(VkResult r) {
     CHLADNI_CASE(VK_ERROR_FORMAT_NOT_SUPPORTED)
     CHLADNI_CASE(VK_ERROR_OUT_OF_POOL_MEMORY)
 #undef CHLADNI_CASE
-    default: return "VkResult(unknown)";
+    default:
+      return "VkResult(unknown)";
   }
 }
 
@@ -145,11 +153,16 @@ void check(VkResult r, const char* what) {
 
 std::string DeviceInfo::type_name() const {
   switch (type) {
-    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual GPU";
-    case VK_PHYSICAL_DEVICE_TYPE_CPU: return "CPU";
-    default: return "other";
+    case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU:
+      return "discrete GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU:
+      return "integrated GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU:
+      return "virtual GPU";
+    case VK_PHYSICAL_DEVICE_TYPE_CPU:
+      return "CPU";
+    default:
+      return "other";
   }
 }
 
@@ -175,9 +188,10 @@ std::vector<DeviceInfo> Context::list_devices() {
   return out;
 }
 
-VKAPI_ATTR VkBool32 VKAPI_CALL Context::on_message(
-    VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT,
-    const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+VKAPI_ATTR VkBool32 VKAPI_CALL Context::on_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                   VkDebugUtilsMessageTypeFlagsEXT,
+                                                   const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                                   void* user) {
   auto* self = static_cast<Context*>(user);
   if (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) {
     ++self->validation_errors_;
@@ -193,7 +207,8 @@ Context::Context(const ContextOptions& options) {
   instance_ = create_instance(options.validation, &validation_on);
   try {
     if (validation_on) {
-      VkDebugUtilsMessengerCreateInfoEXT mi{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+      VkDebugUtilsMessengerCreateInfoEXT mi{
+          VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
       mi.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
                            VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
       mi.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
@@ -203,7 +218,8 @@ Context::Context(const ContextOptions& options) {
       mi.pUserData = this;
       auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
           vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
-      if (create) check(create(instance_, &mi, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
+      if (create)
+        check(create(instance_, &mi, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
     }
 
     std::vector<Candidate> cands = candidates(instance_);
@@ -277,7 +293,9 @@ Context::Context(const ContextOptions& options) {
   }
 }
 
-Context::~Context() { release(); }
+Context::~Context() {
+  release();
+}
 
 void Context::release() {
   if (device_) {
@@ -317,8 +335,9 @@ uint32_t Context::memory_type(uint32_t type_bits, VkMemoryPropertyFlags required
 
 std::string Context::describe() const {
   std::ostringstream os;
-  os << info_.name << " (" << info_.type_name() << ", Vulkan " << VK_API_VERSION_MAJOR(info_.api_version)
-     << "." << VK_API_VERSION_MINOR(info_.api_version) << ", subgroup " << subgroup_size_ << ")";
+  os << info_.name << " (" << info_.type_name() << ", Vulkan "
+     << VK_API_VERSION_MAJOR(info_.api_version) << "." << VK_API_VERSION_MINOR(info_.api_version)
+     << ", subgroup " << subgroup_size_ << ")";
   return os.str();
 }
 

@@ -27,7 +27,8 @@ Pipeline::Pipeline(Context& ctx, std::span<const uint32_t> spirv, uint32_t stora
   VkDescriptorSetLayoutCreateInfo li{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
   li.bindingCount = storage_buffers;
   li.pBindings = bindings.data();
-  check(vkCreateDescriptorSetLayout(dev, &li, nullptr, &set_layout_), "vkCreateDescriptorSetLayout");
+  check(vkCreateDescriptorSetLayout(dev, &li, nullptr, &set_layout_),
+        "vkCreateDescriptorSetLayout");
 
   VkPushConstantRange range{VK_SHADER_STAGE_COMPUTE_BIT, 0, push_constant_bytes};
   VkPipelineLayoutCreateInfo pli{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
@@ -40,7 +41,8 @@ Pipeline::Pipeline(Context& ctx, std::span<const uint32_t> spirv, uint32_t stora
   std::vector<VkSpecializationMapEntry> entries;
   std::vector<uint32_t> values;
   for (const SpecConstant& s : spec) {
-    entries.push_back({s.id, static_cast<uint32_t>(values.size() * sizeof(uint32_t)), sizeof(uint32_t)});
+    entries.push_back(
+        {s.id, static_cast<uint32_t>(values.size() * sizeof(uint32_t)), sizeof(uint32_t)});
     values.push_back(s.value);
   }
   VkSpecializationInfo spi{static_cast<uint32_t>(entries.size()), entries.data(),

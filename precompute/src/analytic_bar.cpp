@@ -29,8 +29,8 @@ namespace {
 // 1 - sigma = (cos bl - sin bl - exp(-bl)) / (sinh bl - sin bl) to avoid cancellation.
 double bending_shape(double beta, double L, double x) {
   const double bl = beta * L, bx = beta * x;
-  const double one_minus_sigma = (std::cos(bl) - std::sin(bl) - std::exp(-bl)) /
-                                 (std::sinh(bl) - std::sin(bl));
+  const double one_minus_sigma =
+      (std::cos(bl) - std::sin(bl) - std::exp(-bl)) / (std::sinh(bl) - std::sin(bl));
   const double sigma = 1.0 - one_minus_sigma;
   const double hyp = 0.5 * (std::exp(bx) * one_minus_sigma + std::exp(-bx) * (1.0 + sigma));
   return hyp + std::cos(bx) - sigma * std::sin(bx);
@@ -50,7 +50,8 @@ double radiation_estimate(int kind, double omega, double L, double b, double h, 
 
 ModalModel analytic_bar(const BarSpec& bar, int stations) {
   if (!(bar.length > 0 && bar.width > 0 && bar.thickness > 0 && bar.youngs_modulus > 0 &&
-        bar.density > 0) || stations < 2) {
+        bar.density > 0) ||
+      stations < 2) {
     throw InputError("analytic bar: dimensions, Young's modulus and density must be > 0");
   }
   const double L = bar.length, b = bar.width, h = bar.thickness, E = bar.youngs_modulus;
@@ -80,7 +81,8 @@ ModalModel analytic_bar(const BarSpec& bar, int stations) {
     if (w > wmax) break;
     modes.push_back({w, 2, n});
   }
-  std::sort(modes.begin(), modes.end(), [](const Mode& a, const Mode& b) { return a.omega < b.omega; });
+  std::sort(modes.begin(), modes.end(),
+            [](const Mode& a, const Mode& b) { return a.omega < b.omega; });
 
   ModalModel m;
   m.name = "analytic bar";
@@ -98,7 +100,8 @@ ModalModel analytic_bar(const BarSpec& bar, int stations) {
       const double x = p[0];
       if (md.kind == 2) {
         // Axial: u = cos(n pi x / L), integral of u^2 = L / 2.
-        m.shapes.push_back({std::sqrt(2.0) * norm * std::cos(md.n * std::numbers::pi * x / L), 0, 0});
+        m.shapes.push_back(
+            {std::sqrt(2.0) * norm * std::cos(md.n * std::numbers::pi * x / L), 0, 0});
       } else {
         const double beta = free_free_beta_l(md.n) / L;
         const double phi = norm * bending_shape(beta, L, x);

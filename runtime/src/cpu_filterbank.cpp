@@ -15,10 +15,14 @@ namespace {
 
 cpu::Isa to_internal(CpuIsa isa) {
   switch (isa) {
-    case CpuIsa::Scalar: return cpu::Isa::Scalar;
-    case CpuIsa::Avx2: return cpu::Isa::Avx2;
-    case CpuIsa::Avx512: return cpu::Isa::Avx512;
-    default: return cpu::best_isa();
+    case CpuIsa::Scalar:
+      return cpu::Isa::Scalar;
+    case CpuIsa::Avx2:
+      return cpu::Isa::Avx2;
+    case CpuIsa::Avx512:
+      return cpu::Isa::Avx512;
+    default:
+      return cpu::best_isa();
   }
 }
 
@@ -34,7 +38,9 @@ constexpr std::size_t kMaxLanes = 16;
 
 }  // namespace
 
-void CpuFilterbank::AlignedFree::operator()(float* p) const { std::free(p); }
+void CpuFilterbank::AlignedFree::operator()(float* p) const {
+  std::free(p);
+}
 
 bool CpuFilterbank::supports(CpuIsa isa) {
   return isa == CpuIsa::Auto || cpu::isa_supported(to_internal(isa));
@@ -63,8 +69,9 @@ CpuFilterbank::CpuFilterbank(const CpuFilterbankOptions& o)
   zi_.reset(aligned_floats(padded_));
   g0_.reset(aligned_floats(padded_));
   g1_.reset(aligned_floats(padded_));
-  const int threads = o.threads > 0 ? o.threads
-                                    : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
+  const int threads = o.threads > 0
+                          ? o.threads
+                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   pool_ = std::make_unique<ThreadPool>(threads);
   sorted_.resize(max_excitations_);
   task_out_.resize(static_cast<std::size_t>(threads) * max_frames_ * channels_);
@@ -94,7 +101,9 @@ void CpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
   g1_[slot] = channels_ == 2 ? gains[1] : 0.0f;
 }
 
-void CpuFilterbank::set_high_water(uint32_t slots) { high_water_ = std::min(slots, capacity_); }
+void CpuFilterbank::set_high_water(uint32_t slots) {
+  high_water_ = std::min(slots, capacity_);
+}
 
 std::complex<float> CpuFilterbank::state(uint32_t slot) {
   if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
@@ -117,7 +126,8 @@ void CpuFilterbank::run_task(void* self_ptr, int t) {
   a.exc_count = r[3] - r[2];
   a.frames = self->frames_;
   a.channels = self->channels_;
-  a.out = self->task_out_.data() + static_cast<std::size_t>(t) * self->max_frames_ * self->channels_;
+  a.out =
+      self->task_out_.data() + static_cast<std::size_t>(t) * self->max_frames_ * self->channels_;
   // 64-byte aligned lane scratch.
   float* lanes = self->task_lanes_.data() +
                  static_cast<std::size_t>(t) * self->max_frames_ * self->channels_ * kMaxLanes;

@@ -19,6 +19,8 @@ struct Avx2 {
 };
 }  // namespace
 
-Kernel avx2_kernel() { return &kernel_entry<Avx2, 4>; }
+Kernel avx2_kernel() {
+  return &kernel_entry<Avx2, 4>;
+}
 
 }  // namespace chladni::runtime::cpu

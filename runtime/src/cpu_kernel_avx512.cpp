@@ -19,6 +19,8 @@ struct Avx512 {
 };
 }  // namespace
 
-Kernel avx512_kernel() { return &kernel_entry<Avx512, 4>; }
+Kernel avx512_kernel() {
+  return &kernel_entry<Avx512, 4>;
+}
 
 }  // namespace chladni::runtime::cpu

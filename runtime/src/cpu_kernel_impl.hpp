@@ -115,8 +115,10 @@ void run_range(const KernelArgs& a) {
 
 template <class S, int NV>
 void kernel_entry(const KernelArgs& a) {
-  if (a.channels == 2) run_range<S, 2, NV>(a);
-  else run_range<S, 1, NV>(a);
+  if (a.channels == 2)
+    run_range<S, 2, NV>(a);
+  else
+    run_range<S, 1, NV>(a);
 }
 
 }  // namespace

@@ -18,6 +18,8 @@ struct Scalar {
 };
 }  // namespace
 
-Kernel scalar_kernel() { return &kernel_entry<Scalar, 8>; }
+Kernel scalar_kernel() {
+  return &kernel_entry<Scalar, 8>;
+}
 
 }  // namespace chladni::runtime::cpu

@@ -18,7 +18,9 @@ namespace {
 constexpr uint32_t kNone = ~0u;
 constexpr uint32_t kReduceChunk = 64;  // rows summed per reduce invocation
 
-uint32_t div_up(uint64_t a, uint64_t b) { return static_cast<uint32_t>((a + b - 1) / b); }
+uint32_t div_up(uint64_t a, uint64_t b) {
+  return static_cast<uint32_t>((a + b - 1) / b);
+}
 
 struct FilterbankPush {
   uint32_t mode_count, samples, exc_count, pad;
@@ -43,7 +45,6 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
       high_water_(o.capacity),
       local_(o.workgroup_size),
       mpi_(o.modes_per_invocation) {
-
   static_assert(sizeof(Update) == 32, "matches apply_updates.comp");
   if (!ctx_) throw std::invalid_argument("GpuFilterbank needs a Vulkan context");
   if (capacity_ == 0) throw std::invalid_argument("filterbank capacity must be > 0");
@@ -108,7 +109,9 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
 
 GpuFilterbank::~GpuFilterbank() = default;
 
-std::string GpuFilterbank::name() const { return "gpu (" + ctx_->describe() + ")"; }
+std::string GpuFilterbank::name() const {
+  return "gpu (" + ctx_->describe() + ")";
+}
 
 GpuFilterbank::Update& GpuFilterbank::pending(uint32_t slot) {
   if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
@@ -139,7 +142,9 @@ void GpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
   u.gain[1] = channels_ == 2 ? gains[1] : 0.0f;
 }
 
-void GpuFilterbank::set_high_water(uint32_t slots) { high_water_ = std::min(slots, capacity_); }
+void GpuFilterbank::set_high_water(uint32_t slots) {
+  high_water_ = std::min(slots, capacity_);
+}
 
 void GpuFilterbank::record_updates() {
   if (!update_count_) return;

@@ -13,7 +13,8 @@ std::complex<double> contact_weight(double J, double tau, double omega_d, double
   // Closed form for F = (J b / 2) sin(b s) on [0, tau] (sin(b tau) = 0, cos(b tau) = -1):
   //   W = J b^2 (1 + exp(-lambda tau)) / (2 (lambda^2 + b^2)).
   const C den = lambda * lambda + b * b;
-  if (std::abs(den) > 1e-6 * b * b) return J * b * b * (1.0 + std::exp(-lambda * tau)) / (2.0 * den);
+  if (std::abs(den) > 1e-6 * b * b)
+    return J * b * b * (1.0 + std::exp(-lambda * tau)) / (2.0 * den);
   // Near resonance (omega_d ~ pi / tau, tiny decay) the closed form is 0/0: integrate instead
   // (composite Simpson over a smooth, half-period integrand).
   constexpr int n = 256;

@@ -10,8 +10,12 @@
 namespace chladni::runtime {
 namespace {
 
-double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double dot(const Vec3& a, const Vec3& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+Vec3 sub(const Vec3& a, const Vec3& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
 Vec3 cross(const Vec3& a, const Vec3& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
@@ -59,15 +63,14 @@ void impact_amplitudes(const ObjectModes& object, const ImpactEvent& ev, double 
     const ModeSpec& m = object.modes[i];
     const std::complex<double> lambda(-m.decay, m.omega_d);
     // Advance the kick from contact start to the sample where it is applied.
-    std::complex<double> w = contact_weight(ev.impulse, ev.contact_time, m.omega_d, m.decay) *
-                             std::exp(lambda * delay);
+    std::complex<double> w =
+        contact_weight(ev.impulse, ev.contact_time, m.omega_d, m.decay) * std::exp(lambda * delay);
     if (object.inline_modes) {
       w *= (*object.inline_modes)[i].amplitude;
     } else if (object.model) {
       // q_i = (v_i(x) . n) J / omega_d ... (DESIGN.md)
-      const double vn = object.model->has_geometry()
-                            ? dot(object.model->shape(i, point), ev.direction)
-                            : 1.0;
+      const double vn =
+          object.model->has_geometry() ? dot(object.model->shape(i, point), ev.direction) : 1.0;
       w *= m.omega_d > 0 ? vn / m.omega_d : 0.0;
     }
     out[i] = std::complex<float>(static_cast<float>(w.real()), static_cast<float>(w.imag()));
@@ -114,7 +117,8 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
   AudioBuffer audio;
   audio.sample_rate = scene.sample_rate;
   audio.channels = scene.channels;
-  audio.samples.reserve(static_cast<std::size_t>(std::min<uint64_t>(limit, 1ull << 28)) * scene.channels);
+  audio.samples.reserve(static_cast<std::size_t>(std::min<uint64_t>(limit, 1ull << 28)) *
+                        scene.channels);
   std::vector<float> buf(static_cast<std::size_t>(block) * scene.channels);
   std::vector<std::complex<float>> amps;
   std::size_t next = 0;

@@ -91,7 +91,8 @@ void Synth::set_mode_gains(VoiceId id, std::span<const float> gains) {
   Voice& v = voice(id);
   if (gains.size() != v.modes.size()) throw std::invalid_argument("set_mode_gains: wrong count");
   for (std::size_t i = 0; i < gains.size(); ++i) {
-    if (!std::isfinite(gains[i])) throw InputError("mode gain " + std::to_string(i) + " is not finite");
+    if (!std::isfinite(gains[i]))
+      throw InputError("mode gain " + std::to_string(i) + " is not finite");
     v.modes[i].gain = gains[i];
     if (v.slot[i] >= 0) apply_gains(static_cast<uint32_t>(v.slot[i]));
   }
@@ -134,7 +135,8 @@ void Synth::steal(uint32_t needed) {
   for (uint32_t s = 0; s < budget_; ++s) {
     if (slot_voice_[s] < 0) continue;
     const Voice& v = voices_[slot_voice_[s]];
-    const double g = std::abs(v.modes[slot_mode_[s]].gain) * std::max(std::abs(v.pan[0]), std::abs(v.pan[1]));
+    const double g =
+        std::abs(v.modes[slot_mode_[s]].gain) * std::max(std::abs(v.pan[0]), std::abs(v.pan[1]));
     const double env = env_[s] * std::exp(-double(rate_[s]) * double(int64_t(now_) - env_time_[s]));
     steal_scratch_.emplace_back(static_cast<float>(env * g), s);
   }
@@ -196,16 +198,16 @@ void Synth::excite(VoiceId id, std::span<const std::complex<float>> amp, uint32_
       rate_[got] = static_cast<float>(m.decay / opt_.sample_rate);
     }
     // Envelope bound: |z(t)| <= env * exp(-rate (t - env_time)); each kick adds its magnitude.
-    const double env =
-        env_[s] * std::exp(-double(rate_[s]) * double(t - env_time_[s])) + a;
+    const double env = env_[s] * std::exp(-double(rate_[s]) * double(t - env_time_[s])) + a;
     env_[s] = static_cast<float>(env);
     env_time_[s] = t;
     peak_[s] = std::max(peak_[s], env_[s]);
     // Retire when env exp(-rate dt) < peak * threshold.
     const double ratio = env / (double(peak_[s]) * threshold_);
-    retire_at_[s] = rate_[s] > 0 ? t + static_cast<int64_t>(std::ceil(std::log(ratio) / rate_[s]))
-                                 : kNever;
-    pending_[pending_count_++] = Excitation{static_cast<uint32_t>(s), offset, amp[i].real(), amp[i].imag()};
+    retire_at_[s] =
+        rate_[s] > 0 ? t + static_cast<int64_t>(std::ceil(std::log(ratio) / rate_[s])) : kNever;
+    pending_[pending_count_++] =
+        Excitation{static_cast<uint32_t>(s), offset, amp[i].real(), amp[i].imag()};
   }
 }
 

@@ -14,7 +14,8 @@ struct AudioBuffer {
   std::size_t frames() const { return channels ? samples.size() / channels : 0; }
 };
 
-/// Writes a WAV file; throws InputError if the file cannot be opened, InternalError on a short write.
+/// Writes a WAV file; throws InputError if the file cannot be opened, InternalError on a short
+/// write.
 void write_wav(const std::string& path, const AudioBuffer& audio,
                SampleFormat format = SampleFormat::Float32);
 

@@ -41,9 +41,9 @@ struct ModalModel {
 /// Which modes survive damping and band limits, and why others were dropped.
 struct ModeSelection {
   std::vector<std::size_t> kept;
-  std::size_t overdamped = 0;     ///< d >= omega
-  std::size_t below_band = 0;     ///< damped frequency below min_hz
-  std::size_t above_band = 0;     ///< damped frequency above max_hz or Nyquist
+  std::size_t overdamped = 0;  ///< d >= omega
+  std::size_t below_band = 0;  ///< damped frequency below min_hz
+  std::size_t above_band = 0;  ///< damped frequency above max_hz or Nyquist
 };
 
 /// Applies a damping model to undamped frequencies: fills decay (d = c/2) and reports which modes

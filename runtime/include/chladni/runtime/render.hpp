@@ -16,7 +16,7 @@ namespace chladni::runtime {
 struct ObjectModes {
   std::vector<ModeSpec> modes;  ///< damped angular frequency, decay, gain at 1 m
   /// Complex state kick per mode for an impact; filled by impact_amplitudes().
-  const ModalModel* model = nullptr;           ///< geometry-backed objects
+  const ModalModel* model = nullptr;  ///< geometry-backed objects
   const std::vector<InlineMode>* inline_modes = nullptr;
 };
 
@@ -32,9 +32,9 @@ void impact_amplitudes(const ObjectModes& object, const ImpactEvent& event, doub
                        std::vector<std::complex<float>>& out);
 
 struct RenderOptions {
-  uint32_t block = 256;       ///< frames per filterbank call
-  double max_tail = 60.0;     ///< s after the last event when the scene gives no duration
-  SynthOptions synth;         ///< sample_rate is taken from the scene
+  uint32_t block = 256;    ///< frames per filterbank call
+  double max_tail = 60.0;  ///< s after the last event when the scene gives no duration
+  SynthOptions synth;      ///< sample_rate is taken from the scene
   std::function<void(double fraction)> progress;  ///< optional
 };
 

@@ -23,8 +23,8 @@ struct ModeSpec {
 
 struct SynthOptions {
   double sample_rate = 48000;
-  uint32_t max_modes = 0;     ///< mode budget; 0: the filterbank's capacity
-  double retire_db = -100;    ///< retire a mode this far below its peak envelope
+  uint32_t max_modes = 0;   ///< mode budget; 0: the filterbank's capacity
+  double retire_db = -100;  ///< retire a mode this far below its peak envelope
   uint32_t max_voices = 1024;
 };
 
@@ -87,7 +87,7 @@ class Synth {
   std::vector<uint32_t> slot_mode_;
   std::vector<float> env_, peak_, rate_;
   std::vector<int64_t> env_time_, retire_at_;
-  std::vector<uint32_t> free_heap_;  // min-heap keeps resident slots low (fewer to process)
+  std::vector<uint32_t> free_heap_;   // min-heap keeps resident slots low (fewer to process)
   std::vector<uint32_t> group_used_;  // resident slots per group of 256
   std::vector<std::pair<float, uint32_t>> steal_scratch_;
   std::vector<Excitation> pending_;
