@@ -4,8 +4,10 @@
 // and channel c of the output is sum_modes gain_c * Im(z[n]).
 // Each invocation advances MPI modes through `samples` samples; per sample the mode sum is
 // reduced across the subgroup and one row of partial sums per subgroup is written; reduce.comp
-// sums the rows. Excitations are sample-accurate: entries (slot, offset, re, im) sorted by slot,
-// then offset, are added right after the pole multiplication at their offset. They split the
+// sums the rows. Excitations are sample-accurate: entries (invocation, offset | j << 16, re, im),
+// sorted by invocation then offset (the host maps slot -> invocation, j), are added right after
+// the pole multiplication at their offset. One list pointer per invocation keeps the hot loop's
+// register pressure low (per-mode pointers doubled its cost on lavapipe). Excitations split the
 // sample loop into segments so that the hot loop carries no per-sample test; segment bounds are
 // subgroup-uniform (subgroupMin) because emit() reduces across the subgroup, which is only
 // defined when every invocation of the subgroup is at the same sample.
@@ -13,13 +15,13 @@
 #extension GL_KHR_shader_subgroup_arithmetic : require
 
 layout(local_size_x_id = 0) in;
-layout(constant_id = 1) const uint MPI = 16;      // modes per invocation
+layout(constant_id = 1) const uint MPI = 32;      // modes per invocation
 layout(constant_id = 2) const uint CHANNELS = 1;  // 1 or 2
 layout(constant_id = 3) const uint ROWS_PER_GROUP = 8;
 
 layout(std430, binding = 0) buffer Modes { vec4 modes[]; };  // (p.re, p.im, z.re, z.im)
 layout(std430, binding = 1) readonly buffer Gains { vec2 gains[]; };
-layout(std430, binding = 2) readonly buffer Excitations { uvec4 exc[]; };
+layout(std430, binding = 2) readonly buffer Excitations { uvec4 exc[]; };  // see above
 layout(std430, binding = 3) writeonly buffer Partials { float partial[]; };
 
 layout(push_constant) uniform Push {
@@ -34,12 +36,12 @@ const uint NONE = 0xffffffffu;
 float pr[MPI], pi[MPI], zr[MPI], zi[MPI], g0[MPI], g1[MPI];
 uint row_base;
 
-// First index in [0, exc_count) whose slot is >= slot.
-uint lower_bound(uint slot) {
+// First index in [0, exc_count) whose invocation is >= inv.
+uint lower_bound(uint inv) {
   uint lo = 0, hi = pc.exc_count;
   while (lo < hi) {
     uint mid = (lo + hi) >> 1;
-    if (exc[mid].x < slot) lo = mid + 1; else hi = mid;
+    if (exc[mid].x < inv) lo = mid + 1; else hi = mid;
   }
   return lo;
 }
@@ -74,25 +76,23 @@ void main() {
   const uint base = gl_WorkGroupID.x * gl_WorkGroupSize.x * MPI;
   row_base = (gl_WorkGroupID.x * ROWS_PER_GROUP + gl_SubgroupID) * pc.samples;
 
-  uint next[MPI], stop[MPI];
-  uint next_n = NONE;
   for (uint j = 0; j < MPI; ++j) {
     const uint s = base + j * gl_WorkGroupSize.x + lid;  // coalesced across the workgroup
     pr[j] = 0.0; pi[j] = 0.0; zr[j] = 0.0; zi[j] = 0.0; g0[j] = 0.0; g1[j] = 0.0;
-    next[j] = 0; stop[j] = 0;
     if (s < pc.mode_count) {
       const vec4 m = modes[s];
       const vec2 g = gains[s];
       pr[j] = m.x; pi[j] = m.y; zr[j] = m.z; zi[j] = m.w; g0[j] = g.x; g1[j] = g.y;
-      if (pc.exc_count > 0) {
-        next[j] = lower_bound(s);
-        stop[j] = lower_bound(s + 1);
-        if (next[j] < stop[j]) next_n = min(next_n, exc[next[j]].y);
-      }
     }
   }
-
-  next_n = subgroupMin(next_n);
+  // This invocation's excitations: [next, stop), in offset order.
+  const uint inv = gl_GlobalInvocationID.x;
+  uint next = 0, stop = 0;
+  if (pc.exc_count > 0) {
+    next = lower_bound(inv);
+    stop = lower_bound(inv + 1);
+  }
+  uint next_n = subgroupMin(next < stop ? (exc[next].y & 0xffffu) : NONE);
   uint n = 0;
   while (n < pc.samples) {
     const uint seg_end = min(next_n, pc.samples);
@@ -103,17 +103,15 @@ void main() {
     if (n == pc.samples) break;
     // Sample n carries excitations of some invocation of the subgroup.
     step();
-    uint mine = NONE;
-    for (uint j = 0; j < MPI; ++j) {
-      while (next[j] < stop[j] && exc[next[j]].y == n) {
-        const vec2 e = uintBitsToFloat(exc[next[j]].zw);
-        zr[j] += e.x;
-        zi[j] += e.y;
-        ++next[j];
+    while (next < stop && (exc[next].y & 0xffffu) == n) {
+      const uint k = exc[next].y >> 16;
+      const vec2 e = uintBitsToFloat(exc[next].zw);
+      for (uint j = 0; j < MPI; ++j) {  // unrolled select: no dynamic indexing of the state
+        if (j == k) { zr[j] += e.x; zi[j] += e.y; }
       }
-      if (next[j] < stop[j]) mine = min(mine, exc[next[j]].y);
+      ++next;
     }
-    next_n = subgroupMin(mine);
+    next_n = subgroupMin(next < stop ? (exc[next].y & 0xffffu) : NONE);
     emit(n);
     ++n;
   }

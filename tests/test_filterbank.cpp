@@ -200,3 +200,20 @@ TEST(Filterbank, RejectsOutOfRangeInput) {
     EXPECT_THROW(fb->set_mode(100, {0.5f, 0.0f}, g), std::out_of_range);
   }
 }
+
+TEST(Filterbank, EveryGpuKernelShapeAgreesWithCpu) {
+  // Real GPUs run 4 modes per invocation by default, lavapipe 32: test both shapes (and 1) here.
+  CHLADNI_REQUIRE_GPU_OR_SKIP(ctx);
+  std::vector<float> ref, out;
+  CpuFilterbank cpu({.capacity = 3000, .channels = 2, .threads = 2});
+  random_run(cpu, 3000, 256, 120, ref, 5);
+  for (uint32_t mpi : {1u, 4u, 32u}) {
+    for (uint32_t local : {32u, 64u}) {
+      GpuFilterbank gpu(ctx, {.capacity = 3000, .channels = 2, .workgroup_size = local,
+                              .modes_per_invocation = mpi});
+      random_run(gpu, 3000, 256, 120, out, 5);
+      EXPECT_LT(max_diff(ref, out), 1e-4 * max_abs(ref)) << "mpi " << mpi << " local " << local;
+    }
+  }
+  EXPECT_EQ(ctx->validation_errors(), 0u);
+}

@@ -48,6 +48,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   static_assert(sizeof(Update) == 32, "matches apply_updates.comp");
   if (!ctx_) throw std::invalid_argument("GpuFilterbank needs a Vulkan context");
   if (capacity_ == 0) throw std::invalid_argument("filterbank capacity must be > 0");
+  if (mpi_ == 0) mpi_ = ctx_->info().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 32 : 4;
+  if (mpi_ > 256) throw std::invalid_argument("modes_per_invocation must be at most 256");
   if (channels_ != 1 && channels_ != 2) throw std::invalid_argument("channels must be 1 or 2");
   gpu::Context& c = *ctx_;
   if (!c.subgroup_arithmetic()) {
@@ -67,7 +69,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   // Scratch holds rows x frames x channels partials plus the first reduce level.
   const uint64_t per_frame = (rows + div_up(rows, kReduceChunk)) * channels_ * sizeof(float);
   const uint64_t budget = std::min<uint64_t>(o.scratch_budget_bytes, lim.maxStorageBufferRange);
-  max_frames_ = static_cast<uint32_t>(std::min<uint64_t>(o.max_frames, budget / per_frame));
+  // Offsets share 16 bits with the mode index in the shader's excitation entries.
+  max_frames_ = static_cast<uint32_t>(std::min<uint64_t>({o.max_frames, budget / per_frame, 65535}));
   if (max_frames_ < 1) throw gpu::Error("filterbank capacity too large for the scratch budget");
 
   const uint64_t mode_bytes = uint64_t{groups} * group_modes * 16;
@@ -77,7 +80,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   modes_ = std::make_unique<gpu::Buffer>(c, mode_bytes, gpu::Memory::DeviceLocal);
   gains_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 8,
                                          gpu::Memory::DeviceLocal);
-  excitations_ = std::make_unique<gpu::Buffer>(c, uint64_t{std::max(1u, max_excitations_)} * 16,
+  // One spare entry: the shader may read the entry after its list.
+  excitations_ = std::make_unique<gpu::Buffer>(c, (uint64_t{max_excitations_} + 1) * 16,
                                                gpu::Memory::HostVisible);
   scratch_ = std::make_unique<gpu::Buffer>(c, per_frame * max_frames_, gpu::Memory::DeviceLocal);
   result_ = std::make_unique<gpu::Buffer>(c, uint64_t{max_frames_} * channels_ * sizeof(float),
@@ -175,17 +179,22 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
     throw std::invalid_argument("process: more excitations than max_excitations()");
   }
   if (frames == 0) return;
-  // The shader walks each slot's excitations in offset order: sort by (slot, offset).
+  // The shader walks each invocation's excitations in offset order: map slot -> (invocation, j)
+  // as filterbank.comp lays modes out, and sort by (invocation, offset).
   auto* exc = static_cast<Excitation*>(excitations_->data());
   const uint32_t ne = static_cast<uint32_t>(excitations.size());
+  const uint32_t per_group = local_ * mpi_;
   for (uint32_t k = 0; k < ne; ++k) {
-    if (excitations[k].slot >= capacity_ || excitations[k].offset >= frames) {
+    const Excitation& e = excitations[k];
+    if (e.slot >= capacity_ || e.offset >= frames) {
       throw std::out_of_range("process: excitation slot or offset out of range");
     }
-    exc[k] = excitations[k];
+    const uint32_t within = e.slot % per_group;
+    const uint32_t invocation = e.slot / per_group * local_ + within % local_;
+    exc[k] = Excitation{invocation, e.offset | (within / local_) << 16, e.re, e.im};
   }
   std::sort(exc, exc + ne, [](const Excitation& a, const Excitation& b) {
-    return a.slot != b.slot ? a.slot < b.slot : a.offset < b.offset;
+    return a.slot != b.slot ? a.slot < b.slot : (a.offset & 0xffffu) < (b.offset & 0xffffu);
   });
 
   const uint32_t group_modes = local_ * mpi_;
@@ -220,6 +229,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   seq_->timestamp(2);
   seq_->run();
   timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
+  timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
   std::memcpy(out, result_->data(), sizeof(float) * count);
   auto* list = static_cast<Update*>(updates_->data());
   for (uint32_t i = 0; i < update_count_; ++i) pending_index_[list[i].slot] = kNone;

@@ -21,7 +21,8 @@ struct Excitation {
 };
 
 struct FilterbankTiming {
-  double gpu_ms = 0;  ///< device time of the last process() (0 when unknown)
+  double gpu_ms = 0;     ///< device time of the last process() (0 when unknown)
+  double kernel_ms = 0;  ///< of which the filterbank kernel (the rest: updates, reduction)
 };
 
 class Filterbank {

@@ -21,7 +21,9 @@ struct GpuFilterbankOptions {
   uint32_t max_frames = 4096;  ///< lowered automatically to fit the scratch budget
   uint32_t max_excitations = 1u << 18;
   uint32_t workgroup_size = 64;
-  uint32_t modes_per_invocation = 16;  ///< amortizes the per-sample subgroup reduction
+  /// Modes each invocation advances; 0 = auto: 32 on CPU devices (lavapipe: amortizes the
+  /// per-sample subgroup reduction), 4 on GPUs (keeps enough invocations in flight).
+  uint32_t modes_per_invocation = 0;
   uint64_t scratch_budget_bytes = 256ull << 20;
 };
 
