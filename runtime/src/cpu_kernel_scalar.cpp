@@ -1,6 +1,4 @@
 // Portable scalar build of the filterbank loop (also the reference for the SIMD builds).
-#include <cmath>
-
 #include "cpu_kernel_impl.hpp"
 
 namespace chladni::runtime::cpu {
@@ -13,8 +11,9 @@ struct Scalar {
   static V zero() { return 0.0f; }
   static V add(V a, V b) { return a + b; }
   static V mul(V a, V b) { return a * b; }
-  static V fmadd(V a, V b, V c) { return std::fma(a, b, c); }
-  static V fmsub(V a, V b, V c) { return std::fma(a, b, -c); }
+  // Plain multiply-add: std::fma without hardware FMA is a slow software routine.
+  static V fmadd(V a, V b, V c) { return a * b + c; }
+  static V fmsub(V a, V b, V c) { return a * b - c; }
 };
 }  // namespace
 
