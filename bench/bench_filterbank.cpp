@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <memory>
+#include <numbers>
 
 #include "chladni/gpu/context.hpp"
 #include "chladni/runtime/cpu_filterbank.hpp"
@@ -16,7 +17,8 @@ namespace {
 void fill(Filterbank& fb, uint32_t n) {
   for (uint32_t s = 0; s < n; ++s) {
     const float g[2] = {1e-3f, 0.0f};
-    fb.set_mode(s, pole(2 * M_PI * (40.0 + 17.0 * (s % 1000)), 2.0 + s % 13, 48000.0), g);
+    fb.set_mode(s, pole(2 * std::numbers::pi * (40.0 + 17.0 * (s % 1000)), 2.0 + s % 13, 48000.0),
+                g);
   }
   fb.set_high_water(n);
   std::vector<Excitation> kick;

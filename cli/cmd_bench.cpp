@@ -6,6 +6,7 @@
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <numbers>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -83,7 +84,7 @@ Record measure(const BenchArgs& a, const std::string& backend, uint32_t n) {
   for (uint32_t s = 0; s < n; ++s) {
     const double f = std::exp(logf(rng));
     const float g[2] = {1.0f / std::sqrt(float(n)), 0.0f};
-    fb->set_mode(s, runtime::pole(2 * M_PI * f, dec(rng), a.sample_rate), g);
+    fb->set_mode(s, runtime::pole(2 * std::numbers::pi * f, dec(rng), a.sample_rate), g);
     kick.push_back({s, 0, 1.0f, 0.0f});
   }
   fb->set_high_water(n);

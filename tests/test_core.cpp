@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <numbers>
 
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/damping.hpp"
@@ -42,7 +43,7 @@ TEST(ModalModel, DampingDropsAndCountsOverdampedAndOutOfBandModes) {
   ModalModel m;
   m.name = "t";
   for (double hz : {10.0, 100.0, 1000.0, 15000.0, 30000.0}) {
-    m.omega.push_back(2 * M_PI * hz);
+    m.omega.push_back(2 * std::numbers::pi * hz);
     m.radiation.push_back(1);
   }
   // Rayleigh with a large stiffness term overdamps the top mode (d = 1e-5 w^2 > w there).

@@ -88,6 +88,6 @@ TEST(Impact, HalfSineClosedFormMatchesQuadratureAndFiltersHighModes) {
     EXPECT_NEAR(std::abs(w - q), 0.0, 1e-6 * J) << f << " Hz";
   }
   // A 1 ms contact passes low modes almost fully and removes most of the energy above 1/tau.
-  EXPECT_GT(std::abs(runtime::contact_weight(J, tau, 2 * M_PI * 50, 1.0)), 0.95 * J);
-  EXPECT_LT(std::abs(runtime::contact_weight(J, tau, 2 * M_PI * 5000, 1.0)), 0.05 * J);
+  EXPECT_GT(std::abs(runtime::contact_weight(J, tau, 2 * std::numbers::pi * 50, 1.0)), 0.95 * J);
+  EXPECT_LT(std::abs(runtime::contact_weight(J, tau, 2 * std::numbers::pi * 5000, 1.0)), 0.05 * J);
 }

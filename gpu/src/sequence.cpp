@@ -98,7 +98,6 @@ void Sequence::wait() {
 
 double Sequence::elapsed_ns(uint32_t from_slot, uint32_t to_slot) const {
   if (!queries_ || from_slot >= slots_ || to_slot >= slots_) return 0.0;
-  uint64_t t[2] = {0, 0};
   uint64_t a = 0, b = 0;
   if (vkGetQueryPoolResults(ctx_->device(), queries_, from_slot, 1, sizeof(uint64_t), &a,
                             sizeof(uint64_t), VK_QUERY_RESULT_64_BIT) != VK_SUCCESS ||
@@ -106,9 +105,9 @@ double Sequence::elapsed_ns(uint32_t from_slot, uint32_t to_slot) const {
                             sizeof(uint64_t), VK_QUERY_RESULT_64_BIT) != VK_SUCCESS) {
     return 0.0;
   }
-  t[0] = a & ctx_->timestamp_mask();
-  t[1] = b & ctx_->timestamp_mask();
-  return static_cast<double>((t[1] - t[0]) & ctx_->timestamp_mask()) * ctx_->timestamp_period_ns();
+  // Counters wrap at timestampValidBits: subtract modulo the valid range.
+  const uint64_t mask = ctx_->timestamp_mask();
+  return static_cast<double>((b - a) & mask) * ctx_->timestamp_period_ns();
 }
 
 }  // namespace chladni::gpu

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 
 #include "chladni/core/error.hpp"
 #include "chladni/runtime/impact.hpp"
@@ -39,7 +40,8 @@ ObjectModes object_modes(const ModalModel& model) {
 ObjectModes object_modes(const std::vector<InlineMode>& modes) {
   ObjectModes o;
   o.inline_modes = &modes;
-  for (const InlineMode& m : modes) o.modes.push_back({2.0 * M_PI * m.frequency, m.decay, 1.0f});
+  for (const InlineMode& m : modes)
+    o.modes.push_back({2.0 * std::numbers::pi * m.frequency, m.decay, 1.0f});
   return o;
 }
 
@@ -105,7 +107,7 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
     const Synth::VoiceId v = synth.start_voice(modes);
     if (scene.channels == 2) {
       const double s = r > 1e-9 ? std::clamp(dot(d, right) / (r * rn), -1.0, 1.0) : 0.0;
-      const double theta = (s + 1.0) * M_PI / 4.0;  // constant-power pan
+      const double theta = (s + 1.0) * std::numbers::pi / 4.0;  // constant-power pan
       synth.set_pan(v, static_cast<float>(std::cos(theta)), static_cast<float>(std::sin(theta)));
     }
     voices.push_back(v);
