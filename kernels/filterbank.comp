@@ -46,6 +46,11 @@ uint lower_bound(uint inv) {
   return lo;
 }
 
+// The first sample at which any invocation of the subgroup has an excitation (uniform).
+uint next_sample(uint next, uint stop) {
+  return subgroupMin(next < stop ? (exc[next].y & 0xffffu) : NONE);
+}
+
 // z <- p z for every mode of this invocation.
 void step() {
   for (uint j = 0; j < MPI; ++j) {
@@ -92,7 +97,7 @@ void main() {
     next = lower_bound(inv);
     stop = lower_bound(inv + 1);
   }
-  uint next_n = subgroupMin(next < stop ? (exc[next].y & 0xffffu) : NONE);
+  uint next_n = next_sample(next, stop);
   uint n = 0;
   while (n < pc.samples) {
     const uint seg_end = min(next_n, pc.samples);
@@ -111,7 +116,7 @@ void main() {
       }
       ++next;
     }
-    next_n = subgroupMin(next < stop ? (exc[next].y & 0xffffu) : NONE);
+    next_n = next_sample(next, stop);
     emit(n);
     ++n;
   }

@@ -12,6 +12,8 @@
 
 using namespace chladni;
 using namespace chladni::runtime;
+using chladni::test::max_abs;
+using chladni::test::max_diff;
 
 namespace {
 
@@ -135,18 +137,6 @@ void random_run(Filterbank& fb, uint32_t modes, uint32_t block, uint32_t blocks,
   }
 }
 
-double max_abs(const std::vector<float>& v) {
-  double m = 0;
-  for (float x : v) m = std::max(m, double(std::abs(x)));
-  return m;
-}
-
-double max_diff(const std::vector<float>& a, const std::vector<float>& b) {
-  double m = 0;
-  for (std::size_t i = 0; i < a.size(); ++i) m = std::max(m, double(std::abs(a[i] - b[i])));
-  return m;
-}
-
 }  // namespace
 
 TEST(Filterbank, InstructionSetsAgree) {
@@ -209,8 +199,9 @@ TEST(Filterbank, EveryGpuKernelShapeAgreesWithCpu) {
   random_run(cpu, 3000, 256, 120, ref, 5);
   for (uint32_t mpi : {1u, 4u, 32u}) {
     for (uint32_t local : {32u, 64u}) {
-      GpuFilterbank gpu(ctx, {.capacity = 3000, .channels = 2, .workgroup_size = local,
-                              .modes_per_invocation = mpi});
+      GpuFilterbank gpu(
+          ctx,
+          {.capacity = 3000, .channels = 2, .workgroup_size = local, .modes_per_invocation = mpi});
       random_run(gpu, 3000, 256, 120, out, 5);
       EXPECT_LT(max_diff(ref, out), 1e-4 * max_abs(ref)) << "mpi " << mpi << " local " << local;
     }

@@ -3,8 +3,11 @@
 // CHLADNI_REQUIRE_GPU=1, which the CI sets so that the GPU path is really tested).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <memory>
+#include <span>
 
 #include "chladni/gpu/context.hpp"
 
@@ -22,6 +25,22 @@ inline std::shared_ptr<gpu::Context> gpu_context() {
     }
   }();
   return ctx;
+}
+
+inline double max_abs(std::span<const float> v) {
+  double m = 0;
+  for (float x : v) m = std::max(m, double(std::abs(x)));
+  return m;
+}
+
+/// Largest sample difference; the two signals must have the same length.
+inline double max_diff(std::span<const float> a, std::span<const float> b) {
+  EXPECT_EQ(a.size(), b.size());
+  double m = 0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+    m = std::max(m, double(std::abs(a[i] - b[i])));
+  }
+  return m;
 }
 
 #define CHLADNI_REQUIRE_GPU_OR_SKIP(ctx)     \

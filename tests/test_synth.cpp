@@ -135,35 +135,24 @@ AudioBuffer render_with(Filterbank& fb, const Scene& scene, uint32_t block) {
   return render_scene(scene, objects, fb, ro);
 }
 
-double peak(const AudioBuffer& a) {
-  double m = 0;
-  for (float x : a.samples) m = std::max(m, double(std::abs(x)));
-  return m;
-}
-
-double diff(const AudioBuffer& a, const AudioBuffer& b) {
-  EXPECT_EQ(a.samples.size(), b.samples.size());
-  double m = 0;
-  for (std::size_t i = 0; i < std::min(a.samples.size(), b.samples.size()); ++i) {
-    m = std::max(m, double(std::abs(a.samples[i] - b.samples[i])));
-  }
-  return m;
-}
-
 }  // namespace
 
 TEST(Render, OutputDoesNotDependOnBlockSize) {
   const Scene scene = test_scene(2);
   CpuFilterbank fb256({.capacity = 1024, .channels = 2, .threads = 2});
   const AudioBuffer ref = render_with(fb256, scene, 256);
-  ASSERT_GT(peak(ref), 1e-3);
+  ASSERT_GT(test::max_abs(ref.samples), 1e-3);
   for (uint32_t block : {64u, 100u, 1000u}) {
     CpuFilterbank fb({.capacity = 1024, .channels = 2, .threads = 2});
-    EXPECT_LT(diff(ref, render_with(fb, scene, block)), 1e-5 * peak(ref)) << "block " << block;
+    EXPECT_LT(test::max_diff(ref.samples, render_with(fb, scene, block).samples),
+              1e-5 * test::max_abs(ref.samples))
+        << "block " << block;
   }
   if (auto ctx = test::gpu_context()) {
     GpuFilterbank gpu(ctx, {.capacity = 1024, .channels = 2});
-    EXPECT_LT(diff(ref, render_with(gpu, scene, 1000)), 1e-4 * peak(ref)) << "gpu, block 1000";
+    EXPECT_LT(test::max_diff(ref.samples, render_with(gpu, scene, 1000).samples),
+              1e-4 * test::max_abs(ref.samples))
+        << "gpu, block 1000";
   }
 }
 

@@ -70,7 +70,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   const uint64_t per_frame = (rows + div_up(rows, kReduceChunk)) * channels_ * sizeof(float);
   const uint64_t budget = std::min<uint64_t>(o.scratch_budget_bytes, lim.maxStorageBufferRange);
   // Offsets share 16 bits with the mode index in the shader's excitation entries.
-  max_frames_ = static_cast<uint32_t>(std::min<uint64_t>({o.max_frames, budget / per_frame, 65535}));
+  max_frames_ =
+      static_cast<uint32_t>(std::min<uint64_t>({o.max_frames, budget / per_frame, 65535}));
   if (max_frames_ < 1) throw gpu::Error("filterbank capacity too large for the scratch budget");
 
   const uint64_t mode_bytes = uint64_t{groups} * group_modes * 16;
@@ -156,13 +157,17 @@ void GpuFilterbank::record_updates() {
   seq_->barrier();
 }
 
+void GpuFilterbank::clear_updates() {
+  auto* list = static_cast<Update*>(updates_->data());
+  for (uint32_t i = 0; i < update_count_; ++i) pending_index_[list[i].slot] = kNone;
+  update_count_ = 0;
+}
+
 void GpuFilterbank::flush_updates() {
   seq_->begin();
   record_updates();
   seq_->run();
-  auto* list = static_cast<Update*>(updates_->data());
-  for (uint32_t i = 0; i < update_count_; ++i) pending_index_[list[i].slot] = kNone;
-  update_count_ = 0;
+  clear_updates();
 }
 
 std::complex<float> GpuFilterbank::state(uint32_t slot) {
@@ -231,9 +236,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
   timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
   std::memcpy(out, result_->data(), sizeof(float) * count);
-  auto* list = static_cast<Update*>(updates_->data());
-  for (uint32_t i = 0; i < update_count_; ++i) pending_index_[list[i].slot] = kNone;
-  update_count_ = 0;
+  clear_updates();
 }
 
 }  // namespace chladni::runtime

@@ -129,6 +129,11 @@ void Synth::drop_pending(uint32_t slot) {
   pending_count_ = w;
 }
 
+double Synth::envelope(uint32_t s, int64_t t) const {
+  // |z(t)| <= env * exp(-rate (t - env_time)).
+  return env_[s] * std::exp(-double(rate_[s]) * double(t - env_time_[s]));
+}
+
 void Synth::steal(uint32_t needed) {
   // The least audible resident modes: envelope bound now times the larger channel gain.
   steal_scratch_.clear();
@@ -137,7 +142,7 @@ void Synth::steal(uint32_t needed) {
     const Voice& v = voices_[slot_voice_[s]];
     const double g =
         std::abs(v.modes[slot_mode_[s]].gain) * std::max(std::abs(v.pan[0]), std::abs(v.pan[1]));
-    const double env = env_[s] * std::exp(-double(rate_[s]) * double(int64_t(now_) - env_time_[s]));
+    const double env = envelope(s, static_cast<int64_t>(now_));
     steal_scratch_.emplace_back(static_cast<float>(env * g), s);
   }
   needed = std::min<uint32_t>(needed, static_cast<uint32_t>(steal_scratch_.size()));
@@ -197,8 +202,8 @@ void Synth::excite(VoiceId id, std::span<const std::complex<float>> amp, uint32_
       env_time_[got] = t;
       rate_[got] = static_cast<float>(m.decay / opt_.sample_rate);
     }
-    // Envelope bound: |z(t)| <= env * exp(-rate (t - env_time)); each kick adds its magnitude.
-    const double env = env_[s] * std::exp(-double(rate_[s]) * double(t - env_time_[s])) + a;
+    // Envelope bound: each kick adds its magnitude to the decayed bound.
+    const double env = envelope(static_cast<uint32_t>(s), t) + a;
     env_[s] = static_cast<float>(env);
     env_time_[s] = t;
     peak_[s] = std::max(peak_[s], env_[s]);

@@ -52,6 +52,7 @@ class GpuFilterbank final : public Filterbank {
   Update& pending(uint32_t slot);
   void record_updates();
   void flush_updates();
+  void clear_updates();  // after a submit has applied them
 
   std::shared_ptr<gpu::Context> ctx_;
   uint32_t capacity_, channels_, max_frames_, max_excitations_, high_water_;

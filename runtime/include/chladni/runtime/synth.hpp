@@ -74,6 +74,7 @@ class Synth {
   void steal(uint32_t needed);
   void apply_gains(uint32_t slot);
   void drop_pending(uint32_t slot);
+  double envelope(uint32_t slot, int64_t t) const;  ///< bound on |z| at sample t
   Voice& voice(VoiceId id);
 
   Filterbank& fb_;
