@@ -7,5 +7,8 @@ namespace chladni::cli {
 void add_render(CLI::App& app);
 void add_bench(CLI::App& app);
 void add_devices(CLI::App& app);
+void add_precompute(CLI::App& app);
+void add_materials(CLI::App& app);
+void add_info(CLI::App& app);
 
 }  // namespace chladni::cli

@@ -10,6 +10,9 @@ int main(int argc, char** argv) {
   CLI::App app{"Chladni: GPU-accelerated modal sound synthesis"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "chladni 0.1.0");
+  chladni::cli::add_precompute(app);
+  chladni::cli::add_info(app);
+  chladni::cli::add_materials(app);
   chladni::cli::add_render(app);
   chladni::cli::add_bench(app);
   chladni::cli::add_devices(app);

@@ -8,10 +8,9 @@
 #include <vector>
 
 #include "chladni/core/damping.hpp"
+#include "chladni/core/vec3.hpp"
 
 namespace chladni {
-
-using Vec3 = std::array<double, 3>;
 
 struct ModalModel {
   std::string name;

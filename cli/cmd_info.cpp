@@ -1,0 +1,91 @@
+// chladni info BANK [--json]: a soundbank's metadata and mode table.
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "chladni/core/error.hpp"
+#include "chladni/core/soundbank.hpp"
+#include "commands.hpp"
+
+namespace chladni::cli {
+namespace {
+
+struct InfoArgs {
+  std::string bank;
+  bool json = false;
+};
+
+void run_info(const InfoArgs& a) {
+  const Soundbank b = read_soundbank(a.bank);
+  nlohmann::json meta = nlohmann::json::parse(b.metadata_json, nullptr, false);
+  if (meta.is_discarded()) meta = b.metadata_json;
+  const double ln1000 = std::log(1000.0);
+  auto row = [&](std::size_t i) {
+    const double w = b.omega[i], d = b.decay[i];
+    const double wd = std::sqrt(w * w - d * d);
+    struct {
+      double f, d, zeta, t60, res;
+    } r{wd / (2 * std::numbers::pi), d, d / w, d > 0 ? ln1000 / d : INFINITY, b.residual[i]};
+    return r;
+  };
+  if (a.json) {
+    nlohmann::json j;
+    j["file"] = a.bank;
+    j["version"] =
+        std::to_string(Soundbank::kVersionMajor) + "." + std::to_string(Soundbank::kVersionMinor);
+    j["metadata"] = meta;
+    j["material"] = {{"name", b.material.name},
+                     {"E", b.material.youngs_modulus},
+                     {"nu", b.material.poisson_ratio},
+                     {"rho", b.material.density},
+                     {"damping", b.material.damping.to_string()},
+                     {"source", b.material.source}};
+    j["surface"] = {{"vertices", b.vertices.size()}, {"triangles", b.triangles.size()}};
+    j["transfer"] =
+        b.transfer.empty() ? nlohmann::json(nullptr) : nlohmann::json(b.transfer.size());
+    nlohmann::json modes = nlohmann::json::array();
+    for (std::size_t i = 0; i < b.mode_count(); ++i) {
+      const auto r = row(i);
+      modes.push_back(
+          {{"frequency_hz", r.f},
+           {"decay_per_s", r.d},
+           {"damping_ratio", r.zeta},
+           {"t60_s", std::isfinite(r.t60) ? nlohmann::json(r.t60) : nlohmann::json(nullptr)},
+           {"residual", r.res}});
+    }
+    j["modes"] = modes;
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf("soundbank %s (format %u.%u)\n", a.bank.c_str(), Soundbank::kVersionMajor,
+              Soundbank::kVersionMinor);
+  std::printf("material  %s: E %.4g Pa, nu %.3g, rho %.4g kg/m^3\n", b.material.name.c_str(),
+              b.material.youngs_modulus, b.material.poisson_ratio, b.material.density);
+  std::printf("damping   %s\n", b.material.damping.to_string().c_str());
+  if (!b.material.source.empty()) std::printf("source    %s\n", b.material.source.c_str());
+  std::printf("surface   %zu vertices, %zu triangles\n", b.vertices.size(), b.triangles.size());
+  std::printf("transfer  %s\n", b.transfer.empty() ? "none" : "present");
+  if (meta.is_object())
+    for (const auto& [k, v] : meta.items())
+      std::printf("meta      %s: %s\n", k.c_str(), v.dump().c_str());
+  std::printf("%zu modes\n%6s %12s %12s %12s %10s %10s\n", b.mode_count(), "mode", "freq (Hz)",
+              "decay (1/s)", "damp. ratio", "T60 (s)", "residual");
+  for (std::size_t i = 0; i < b.mode_count(); ++i) {
+    const auto r = row(i);
+    std::printf("%6zu %12.2f %12.4g %12.3g %10.3g %10.2g\n", i, r.f, r.d, r.zeta, r.t60, r.res);
+  }
+}
+
+}  // namespace
+
+void add_info(CLI::App& app) {
+  auto a = std::make_shared<InfoArgs>();
+  CLI::App* cmd = app.add_subcommand("info", "Print a soundbank's metadata and mode table");
+  cmd->add_option("bank", a->bank, "Soundbank (.chbank)")->required();
+  cmd->add_flag("--json", a->json, "Print JSON instead of a table");
+  cmd->callback([a] { run_info(*a); });
+}
+
+}  // namespace chladni::cli

@@ -1,0 +1,197 @@
+// chladni precompute MESH -o BANK: the precompute pipeline from a closed mesh to a soundbank.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "chladni/core/error.hpp"
+#include "chladni/precompute/precompute.hpp"
+#include "commands.hpp"
+#include "progress.hpp"
+
+namespace chladni::cli {
+namespace {
+
+struct PrecomputeArgs {
+  std::string mesh, output, save_surface, unit = "m", material = "steel", damping,
+                                          mass = "consistent", json_path;
+  double scale = 1, E = NAN, nu = NAN, rho = NAN, max_freq = 20000, sample_rate = 48000;
+  double max_tet_volume = 0;
+  int order = 2, threads = 0;
+  std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
+  bool repair = false, quiet = false;
+};
+
+nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::PrecomputeReport& r,
+                            const Soundbank& bank) {
+  nlohmann::json j;
+  j["mesh"] = a.mesh;
+  j["output"] = a.output;
+  j["material"] = {{"name", bank.material.name},
+                   {"E", bank.material.youngs_modulus},
+                   {"nu", bank.material.poisson_ratio},
+                   {"rho", bank.material.density},
+                   {"damping", bank.material.damping.to_string()}};
+  j["surface"] = {
+      {"vertices", r.mesh.vertices}, {"triangles", r.mesh.triangles}, {"volume_m3", r.mesh.volume}};
+  j["repairs"] = r.repairs;
+  j["volume_mesh"] = {{"tetrahedra", r.tets},
+                      {"nodes", r.nodes},
+                      {"dofs", r.dofs},
+                      {"nonzeros", r.nonzeros},
+                      {"element_order", a.order},
+                      {"max_tet_volume_m3", r.max_tet_volume},
+                      {"max_radius_edge", r.quality.max_radius_edge},
+                      {"mean_radius_edge", r.quality.mean_radius_edge},
+                      {"min_dihedral_deg", r.quality.min_dihedral_deg}};
+  j["eigen"] = {{"factorization", r.eigen.factorization},
+                {"rigid_removed", r.eigen.rigid_removed},
+                {"rigid_lambda", r.eigen.rigid_lambda},
+                {"computed", r.computed},
+                {"lanczos_runs", r.eigen.solves},
+                {"operations", r.eigen.operations},
+                {"capped", r.eigen.capped},
+                {"max_residual", r.max_residual},
+                {"factor_seconds", r.eigen.factor_seconds},
+                {"lanczos_seconds", r.eigen.lanczos_seconds}};
+  j["modes"] = {{"kept", r.kept},
+                {"overdamped", r.overdamped},
+                {"below_band", r.below_band},
+                {"above_band", r.above_band}};
+  nlohmann::json freqs = nlohmann::json::array();
+  for (double w : bank.omega) freqs.push_back(w / (2 * std::numbers::pi));
+  j["frequencies_hz"] = freqs;
+  nlohmann::json stages = nlohmann::json::object();
+  for (const auto& s : r.stages) stages[s.name] = s.seconds;
+  j["seconds"] = stages;
+  j["total_seconds"] = r.total_seconds;
+  return j;
+}
+
+void run_precompute(const PrecomputeArgs& a) {
+  precompute::PrecomputeOptions o;
+  o.scale = precompute::unit_scale(a.unit) * a.scale;
+  o.repair = a.repair;
+  o.save_surface = a.save_surface;
+  o.repair_options.max_hole_edges = a.max_hole_edges;
+  o.material = find_material(a.material);
+  if (!std::isnan(a.E) || !std::isnan(a.nu) || !std::isnan(a.rho))
+    o.material.name = a.material + " (modified)";
+  if (!std::isnan(a.E)) o.material.youngs_modulus = a.E;
+  if (!std::isnan(a.nu)) o.material.poisson_ratio = a.nu;
+  if (!std::isnan(a.rho)) o.material.density = a.rho;
+  if (!a.damping.empty()) o.material.damping = DampingModel::parse(a.damping);
+  o.material.validate();
+  o.order = a.order;
+  if (a.mass == "lumped")
+    o.mass = precompute::MassKind::Lumped;
+  else if (a.mass != "consistent")
+    throw InputError("--mass must be consistent or lumped");
+  o.max_modes = a.max_modes;
+  o.max_frequency = a.max_freq;
+  o.sample_rate = a.sample_rate;
+  o.max_tet_volume = a.max_tet_volume;
+  o.threads = a.threads;
+  o.mode_cap = std::max(a.mode_cap, a.max_modes);
+
+  ProgressBar bar(a.quiet);
+  precompute::Progress p;
+  p.stage = [&](const std::string& s) { bar.stage(s); };
+  p.fraction = [&](double f) { bar.fraction(f); };
+  p.note = [&](const std::string& s) { bar.note(s); };
+  precompute::PrecomputeReport r;
+  const Soundbank bank = precompute::precompute_mesh(a.mesh, o, r, p);
+  bar.finish();
+  write_soundbank(a.output, bank);
+
+  if (!a.json_path.empty()) {
+    std::ofstream f(a.json_path);
+    if (!f) throw InputError("cannot write " + a.json_path);
+    f << summary_json(a, r, bank).dump(2) << '\n';
+  }
+  if (a.quiet) return;
+  std::printf("mesh %s: %zu vertices, %zu triangles, volume %.4g m^3\n", a.mesh.c_str(),
+              r.mesh.vertices, r.mesh.triangles, r.mesh.volume);
+  for (const auto& line : r.repairs) std::printf("  repaired: %s\n", line.c_str());
+  std::printf("material %s: E %.4g Pa, nu %.3g, rho %.4g kg/m^3, damping %s\n",
+              bank.material.name.c_str(), bank.material.youngs_modulus, bank.material.poisson_ratio,
+              bank.material.density, bank.material.damping.to_string().c_str());
+  std::printf(
+      "tetrahedra %zu (P%d, %zu nodes, %zu DOFs, max volume %.3g m^3); quality: radius-edge max "
+      "%.2f mean %.2f, min dihedral %.1f deg\n",
+      r.tets, a.order, r.nodes, r.dofs, r.max_tet_volume, r.quality.max_radius_edge,
+      r.quality.mean_radius_edge, r.quality.min_dihedral_deg);
+  std::printf("eigen-solve (%s): %zu rigid modes removed, %zu elastic modes, max residual %.2g%s\n",
+              r.eigen.factorization.c_str(), r.eigen.rigid_removed, r.computed, r.max_residual,
+              r.eigen.capped ? " (stopped at --mode-cap before --max-freq)" : "");
+  std::printf("modes kept %zu; dropped: %zu overdamped, %zu below 20 Hz, %zu above %.0f Hz\n",
+              r.kept, r.overdamped, r.below_band, r.above_band,
+              std::min(a.max_freq, a.sample_rate / 2));
+  if (!bank.omega.empty()) {
+    std::printf("lowest:");
+    for (std::size_t i = 0; i < std::min<std::size_t>(8, bank.omega.size()); ++i)
+      std::printf(" %.1f", bank.omega[i] / (2 * std::numbers::pi));
+    std::printf(" Hz\n");
+  }
+  std::printf("time:");
+  for (const auto& s : r.stages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);
+  std::printf(" total %.2f s\nwrote %s\n", r.total_seconds, a.output.c_str());
+}
+
+}  // namespace
+
+void add_precompute(CLI::App& app) {
+  auto a = std::make_shared<PrecomputeArgs>();
+  CLI::App* cmd =
+      app.add_subcommand("precompute", "Mesh (OBJ/OFF/PLY/STL) to modal soundbank (.chbank)");
+  cmd->add_option("mesh", a->mesh, "Closed triangle mesh")->required();
+  cmd->add_option("-o,--output", a->output, "Soundbank to write")->required();
+  cmd->add_option("--unit", a->unit, "Unit of the mesh coordinates: m, cm, mm")
+      ->capture_default_str();
+  cmd->add_option("--scale", a->scale, "Extra factor on the coordinates")->capture_default_str();
+  cmd->add_option("--material", a->material,
+                  "Preset (chladni materials lists them), NAME or NAME:VARIANT")
+      ->capture_default_str();
+  cmd->add_option("--E", a->E, "Young's modulus (Pa), overrides the preset");
+  cmd->add_option("--nu", a->nu, "Poisson's ratio, overrides the preset");
+  cmd->add_option("--rho", a->rho, "Density (kg/m^3), overrides the preset");
+  cmd->add_option("--damping", a->damping,
+                  "rayleigh:A1,A2 | caughey:A1,...,AN | power:A1,A2 | hybrid:R1,R2,P1,P2");
+  cmd->add_option("--order", a->order, "Element order: 1 (linear) or 2 (quadratic)")
+      ->capture_default_str();
+  cmd->add_option("--mass", a->mass, "Mass matrix: consistent or lumped")->capture_default_str();
+  cmd->add_option("--max-modes", a->max_modes,
+                  "Compute the first N elastic modes (0: all below --max-freq)");
+  cmd->add_option("--max-freq", a->max_freq, "Highest frequency of interest (Hz)")
+      ->capture_default_str();
+  cmd->add_option("--sample-rate", a->sample_rate, "Drop modes above its Nyquist frequency (Hz)")
+      ->capture_default_str();
+  cmd->add_option("--max-tet-volume", a->max_tet_volume,
+                  "Largest tetrahedron (m^3; 0: from --max-freq)");
+  cmd->add_option("--mode-cap", a->mode_cap, "Most modes searched for below --max-freq")
+      ->capture_default_str();
+  cmd->add_flag("--repair", a->repair, "Try CGAL's standard repairs on a bad mesh and report them");
+  cmd->add_option("--save-surface", a->save_surface, "Write the checked (repaired) surface as OBJ");
+  cmd->add_option("--max-hole-edges", a->max_hole_edges,
+                  "--repair fills holes up to this many edges")
+      ->capture_default_str();
+  cmd->add_option("--threads", a->threads, "Assembly threads (0: all cores)")
+      ->capture_default_str();
+  cmd->add_option("--json", a->json_path, "Write a JSON summary (stages, timings, modes)");
+  cmd->add_flag("-q,--quiet", a->quiet, "No progress and no summary");
+  cmd->callback([a] { run_precompute(*a); });
+}
+
+void add_materials(CLI::App& app) {
+  CLI::App* cmd = app.add_subcommand("materials", "List the material presets and their sources");
+  cmd->callback([] {
+    for (const Material& m : material_presets())
+      std::printf("%-26s E %8.3g Pa  nu %.2f  rho %6.0f  %-30s %s\n", m.name.c_str(),
+                  m.youngs_modulus, m.poisson_ratio, m.density, m.damping.to_string().c_str(),
+                  m.source.c_str());
+  });
+}
+
+}  // namespace chladni::cli

@@ -1,0 +1,28 @@
+#pragma once
+// Progress on stderr for long commands: a redrawn bar on a terminal, nothing otherwise.
+#include <chrono>
+#include <string>
+
+namespace chladni::cli {
+
+class ProgressBar {
+ public:
+  /// enabled = !quiet && stderr is a terminal.
+  explicit ProgressBar(bool quiet);
+  ~ProgressBar();
+  void stage(const std::string& name);
+  void fraction(double f);  ///< 0..1 of the current stage
+  void note(const std::string& text);
+  void finish();
+  bool enabled() const { return enabled_; }
+
+ private:
+  void draw(double f);
+  bool enabled_;
+  std::string stage_;
+  int index_ = 0;
+  std::chrono::steady_clock::time_point t0_, last_draw_;
+  bool open_line_ = false;
+};
+
+}  // namespace chladni::cli

@@ -1,0 +1,23 @@
+#pragma once
+// The 3-vector used for positions, normals and mode shapes, and the few operations on it.
+#include <array>
+
+namespace chladni {
+
+using Vec3 = std::array<double, 3>;
+
+inline Vec3 sub(const Vec3& a, const Vec3& b) {
+  return {a[0] - b[0], a[1] - b[1], a[2] - b[2]};
+}
+inline double dot(const Vec3& a, const Vec3& b) {
+  return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+inline Vec3 cross(const Vec3& a, const Vec3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+/// (b - a) x (c - a): the normal of triangle abc, of length twice its area.
+inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
+  return cross(sub(b, a), sub(c, a));
+}
+
+}  // namespace chladni

@@ -1,0 +1,425 @@
+#include "chladni/core/soundbank.hpp"
+
+#include <zlib.h>
+
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <numbers>
+
+#include "chladni/core/error.hpp"
+
+namespace chladni {
+namespace {
+
+// Layout (docs/soundbank-format.md): 32-byte header, section_count 32-byte table entries, then
+// 8-byte aligned payloads.
+constexpr char kMagic[8] = {'C', 'H', 'L', 'A', 'D', 'N', 'I', 'B'};
+constexpr std::size_t kHeaderSize = 32, kEntrySize = 32;
+constexpr std::size_t kMaxSections = 64;
+
+uint32_t crc32_of(const uint8_t* p, std::size_t n) {
+  uLong c = crc32(0L, Z_NULL, 0);
+  while (n > 0) {  // zlib takes uInt lengths
+    const uInt chunk = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
+    c = crc32(c, p, chunk);
+    p += chunk, n -= chunk;
+  }
+  return static_cast<uint32_t>(c);
+}
+
+// Explicit little-endian encoding, independent of the host's byte order.
+class Writer {
+ public:
+  std::vector<uint8_t> bytes;
+  void u8s(const void* p, std::size_t n) {
+    const auto* b = static_cast<const uint8_t*>(p);
+    bytes.insert(bytes.end(), b, b + n);
+  }
+  template <class T>
+  void le(T v) {
+    using U = std::conditional_t<sizeof(T) == 8, uint64_t,
+                                 std::conditional_t<sizeof(T) == 4, uint32_t, uint16_t>>;
+    const U u = std::bit_cast<U>(v);
+    for (std::size_t k = 0; k < sizeof(T); ++k) bytes.push_back(uint8_t(u >> (8 * k)));
+  }
+  void str(const std::string& s) {
+    le<uint32_t>(static_cast<uint32_t>(s.size()));
+    u8s(s.data(), s.size());
+  }
+};
+
+class Reader {
+ public:
+  Reader(const uint8_t* p, std::size_t n, std::string where)
+      : p_(p), n_(n), where_(std::move(where)) {}
+  template <class T>
+  T le() {
+    need(sizeof(T));
+    using U = std::conditional_t<sizeof(T) == 8, uint64_t,
+                                 std::conditional_t<sizeof(T) == 4, uint32_t, uint16_t>>;
+    U u = 0;
+    for (std::size_t k = 0; k < sizeof(T); ++k) u |= U(p_[pos_ + k]) << (8 * k);
+    pos_ += sizeof(T);
+    return std::bit_cast<T>(u);
+  }
+  std::string str(std::size_t max_len) {
+    const uint32_t len = le<uint32_t>();
+    if (len > max_len) fail("string length " + std::to_string(len) + " is implausible");
+    need(len);
+    std::string s(reinterpret_cast<const char*>(p_ + pos_), len);
+    pos_ += len;
+    return s;
+  }
+  // Count of items of `item_bytes` each that must still fit in the section.
+  void need_items(uint64_t count, std::size_t item_bytes, const char* what) {
+    if (count > (n_ - pos_) / item_bytes) {
+      fail(std::string(what) + ": " + std::to_string(count) + " items of " +
+           std::to_string(item_bytes) + " bytes do not fit in the " + std::to_string(n_ - pos_) +
+           " bytes left (truncated or corrupted)");
+    }
+  }
+  void expect_end() {
+    if (pos_ != n_) fail(std::to_string(n_ - pos_) + " unexpected trailing bytes");
+  }
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(where_ + ": " + what); }
+
+ private:
+  void need(std::size_t k) {
+    if (n_ - pos_ < k) fail("truncated (needs " + std::to_string(k) + " more bytes)");
+  }
+  const uint8_t* p_;
+  std::size_t n_, pos_ = 0;
+  std::string where_;
+};
+
+std::string tag_name(uint32_t tag) {
+  std::string s;
+  for (int k = 0; k < 4; ++k) {
+    const char c = char(tag >> (8 * k));
+    s += (c >= 32 && c < 127) ? c : '?';
+  }
+  return s;
+}
+constexpr uint32_t make_tag(const char (&t)[5]) {
+  return uint32_t(uint8_t(t[0])) | uint32_t(uint8_t(t[1])) << 8 | uint32_t(uint8_t(t[2])) << 16 |
+         uint32_t(uint8_t(t[3])) << 24;
+}
+constexpr uint32_t kMeta = make_tag("META"), kMatl = make_tag("MATL"), kMode = make_tag("MODE"),
+                   kSurf = make_tag("SURF"), kShap = make_tag("SHAP"), kXfer = make_tag("XFER");
+
+bool finite3(const Vec3& v) {
+  return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
+}
+
+}  // namespace
+
+void Soundbank::validate() const {
+  material.validate();
+  const std::size_t n = omega.size(), nv = vertices.size();
+  if (decay.size() != n || residual.size() != n)
+    throw InputError("soundbank: " + std::to_string(n) + " frequencies but " +
+                     std::to_string(decay.size()) + " decay rates and " +
+                     std::to_string(residual.size()) + " residuals");
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(omega[i]) || !(omega[i] > 0) || !std::isfinite(decay[i]) || decay[i] < 0 ||
+        !(decay[i] < omega[i]) || !std::isfinite(residual[i]) || residual[i] < 0)
+      throw InputError("soundbank: mode " + std::to_string(i) +
+                       ": frequency, decay or residual is not finite or out of range");
+    if (i > 0 && omega[i] < omega[i - 1])
+      throw InputError("soundbank: mode " + std::to_string(i) + " is out of ascending order");
+  }
+  if (nv == 0) throw InputError("soundbank: the surface has no vertices");
+  for (std::size_t v = 0; v < nv; ++v)
+    if (!finite3(vertices[v]))
+      throw InputError("soundbank: surface vertex " + std::to_string(v) + " is not finite");
+  for (std::size_t t = 0; t < triangles.size(); ++t)
+    for (uint32_t idx : triangles[t])
+      if (idx >= nv)
+        throw InputError("soundbank: triangle " + std::to_string(t) + " refers to vertex " +
+                         std::to_string(idx) + " of " + std::to_string(nv));
+  if (normals.size() != nv) throw InputError("soundbank: normals and vertices differ in count");
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto& q = normals[v];
+    const double len = std::sqrt(double(q[0]) * q[0] + double(q[1]) * q[1] + double(q[2]) * q[2]);
+    if (!(std::abs(len - 1.0) < 1e-3))
+      throw InputError("soundbank: normal of vertex " + std::to_string(v) +
+                       " is not a unit vector");
+  }
+  if (shapes.size() != n * nv * 3)
+    throw InputError("soundbank: " + std::to_string(shapes.size()) + " shape values for " +
+                     std::to_string(n) + " modes x " + std::to_string(nv) + " vertices x 3");
+  for (std::size_t k = 0; k < shapes.size(); ++k)
+    if (!std::isfinite(shapes[k]))
+      throw InputError("soundbank: shape of mode " + std::to_string(k / (3 * nv)) + " at vertex " +
+                       std::to_string((k / 3) % nv) + " is not finite");
+}
+
+std::vector<uint8_t> serialize_soundbank(const Soundbank& b) {
+  b.validate();
+  std::vector<std::pair<uint32_t, Writer>> sections;
+  {
+    Writer w;
+    w.u8s(b.metadata_json.data(), b.metadata_json.size());
+    sections.emplace_back(kMeta, std::move(w));
+  }
+  {
+    Writer w;
+    w.le(b.material.youngs_modulus), w.le(b.material.poisson_ratio), w.le(b.material.density);
+    w.le<uint32_t>(static_cast<uint32_t>(b.material.damping.kind));
+    w.le<uint32_t>(static_cast<uint32_t>(b.material.damping.alpha.size()));
+    for (double a : b.material.damping.alpha) w.le(a);
+    w.str(b.material.name);
+    w.str(b.material.source);
+    sections.emplace_back(kMatl, std::move(w));
+  }
+  {
+    Writer w;
+    w.le<uint32_t>(static_cast<uint32_t>(b.omega.size())), w.le<uint32_t>(0);
+    for (std::size_t i = 0; i < b.omega.size(); ++i)
+      w.le(b.omega[i]), w.le(b.decay[i]), w.le(b.residual[i]), w.le<uint32_t>(0);
+    sections.emplace_back(kMode, std::move(w));
+  }
+  {
+    Writer w;
+    w.le<uint32_t>(static_cast<uint32_t>(b.vertices.size()));
+    w.le<uint32_t>(static_cast<uint32_t>(b.triangles.size()));
+    for (const Vec3& v : b.vertices) w.le(v[0]), w.le(v[1]), w.le(v[2]);
+    for (const auto& t : b.triangles) w.le(t[0]), w.le(t[1]), w.le(t[2]);
+    for (const auto& q : b.normals) w.le(q[0]), w.le(q[1]), w.le(q[2]);
+    sections.emplace_back(kSurf, std::move(w));
+  }
+  {
+    Writer w;
+    w.le<uint32_t>(static_cast<uint32_t>(b.omega.size()));
+    w.le<uint32_t>(static_cast<uint32_t>(b.vertices.size()));
+    for (float s : b.shapes) w.le(s);
+    sections.emplace_back(kShap, std::move(w));
+  }
+  if (!b.transfer.empty()) {
+    Writer w;
+    w.u8s(b.transfer.data(), b.transfer.size());
+    sections.emplace_back(kXfer, std::move(w));
+  }
+
+  Writer table;
+  uint64_t offset = kHeaderSize + kEntrySize * sections.size();
+  std::vector<uint64_t> offsets;
+  for (auto& [tag, w] : sections) {
+    offset = (offset + 7) & ~uint64_t(7);
+    offsets.push_back(offset);
+    table.le(tag), table.le<uint32_t>(0), table.le<uint64_t>(offset);
+    table.le<uint64_t>(w.bytes.size()), table.le(crc32_of(w.bytes.data(), w.bytes.size()));
+    table.le<uint32_t>(0);
+    offset += w.bytes.size();
+  }
+  Writer out;
+  out.u8s(kMagic, 8);
+  out.le(Soundbank::kVersionMajor), out.le(Soundbank::kVersionMinor);
+  out.le<uint32_t>(static_cast<uint32_t>(sections.size()));
+  out.le<uint64_t>(offset);
+  out.le(crc32_of(table.bytes.data(), table.bytes.size()));
+  out.le(crc32_of(out.bytes.data(), out.bytes.size()));
+  out.u8s(table.bytes.data(), table.bytes.size());
+  for (std::size_t s = 0; s < sections.size(); ++s) {
+    out.bytes.resize(offsets[s], 0);
+    out.u8s(sections[s].second.bytes.data(), sections[s].second.bytes.size());
+  }
+  return std::move(out.bytes);
+}
+
+Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& origin) {
+  const std::string who = "soundbank " + origin;
+  if (bytes.size() < kHeaderSize || std::memcmp(bytes.data(), kMagic, 8) != 0)
+    throw InputError(who + ": not a Chladni soundbank (bad magic or shorter than its header)");
+  Reader h(bytes.data() + 8, kHeaderSize - 8, who + ": header");
+  const auto major = h.le<uint16_t>(), minor = h.le<uint16_t>();
+  const auto count = h.le<uint32_t>();
+  const auto file_size = h.le<uint64_t>();
+  const auto table_crc = h.le<uint32_t>(), header_crc = h.le<uint32_t>();
+  if (crc32_of(bytes.data(), 28) != header_crc)
+    throw InputError(who + ": header checksum mismatch (file corrupted)");
+  if (major != Soundbank::kVersionMajor)
+    throw InputError(who + ": format version " + std::to_string(major) + "." +
+                     std::to_string(minor) + " is not supported (this build reads " +
+                     std::to_string(Soundbank::kVersionMajor) + ".x)");
+  if (file_size != bytes.size())
+    throw InputError(who + ": file is " + std::to_string(bytes.size()) +
+                     " bytes but its header says " + std::to_string(file_size) +
+                     " (truncated or padded)");
+  if (count > kMaxSections || kHeaderSize + kEntrySize * count > bytes.size())
+    throw InputError(who + ": section table of " + std::to_string(count) + " entries does not fit");
+  const uint8_t* table = bytes.data() + kHeaderSize;
+  if (crc32_of(table, kEntrySize * count) != table_crc)
+    throw InputError(who + ": section table checksum mismatch (file corrupted)");
+
+  std::map<uint32_t, std::pair<const uint8_t*, std::size_t>> found;
+  for (uint32_t s = 0; s < count; ++s) {
+    Reader e(table + kEntrySize * s, kEntrySize, who + ": section table");
+    const auto tag = e.le<uint32_t>();
+    e.le<uint32_t>();
+    const auto off = e.le<uint64_t>(), size = e.le<uint64_t>();
+    const auto crc = e.le<uint32_t>();
+    const std::string name = "section '" + tag_name(tag) + "'";
+    if (off < kHeaderSize + kEntrySize * count || off > bytes.size() || size > bytes.size() - off)
+      throw InputError(who + ": " + name + " lies outside the file");
+    if (crc32_of(bytes.data() + off, size) != crc)
+      throw InputError(who + ": " + name + " checksum mismatch (file corrupted)");
+    if (!found.emplace(tag, std::make_pair(bytes.data() + off, std::size_t(size))).second)
+      throw InputError(who + ": " + name + " appears twice");
+  }
+  auto section = [&](uint32_t tag) {
+    auto it = found.find(tag);
+    if (it == found.end())
+      throw InputError(who + ": required section '" + tag_name(tag) + "' is missing");
+    return Reader(it->second.first, it->second.second, who + ": section '" + tag_name(tag) + "'");
+  };
+
+  Soundbank b;
+  {
+    auto it = found.find(kMeta);
+    if (it != found.end())
+      b.metadata_json.assign(reinterpret_cast<const char*>(it->second.first), it->second.second);
+  }
+  {
+    Reader r = section(kMatl);
+    b.material.youngs_modulus = r.le<double>();
+    b.material.poisson_ratio = r.le<double>();
+    b.material.density = r.le<double>();
+    const auto kind = r.le<uint32_t>();
+    if (kind > uint32_t(DampingModel::Kind::Hybrid))
+      r.fail("unknown damping model " + std::to_string(kind));
+    b.material.damping.kind = DampingModel::Kind(kind);
+    const auto na = r.le<uint32_t>();
+    r.need_items(na, 8, "damping parameters");
+    b.material.damping.alpha.resize(na);
+    for (double& a : b.material.damping.alpha) a = r.le<double>();
+    b.material.name = r.str(4096);
+    b.material.source = r.str(1 << 16);
+    r.expect_end();
+    try {
+      b.material.validate();
+    } catch (const InputError& e) {
+      r.fail(e.what());
+    }
+  }
+  {
+    Reader r = section(kMode);
+    const auto n = r.le<uint32_t>();
+    r.le<uint32_t>();
+    r.need_items(n, 24, "modes");
+    b.omega.resize(n), b.decay.resize(n), b.residual.resize(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      b.omega[i] = r.le<double>(), b.decay[i] = r.le<double>(), b.residual[i] = r.le<float>();
+      r.le<uint32_t>();
+    }
+    r.expect_end();
+  }
+  {
+    Reader r = section(kSurf);
+    const auto nv = r.le<uint32_t>(), nt = r.le<uint32_t>();
+    r.need_items(uint64_t(nv) * 3, 8, "vertices");
+    b.vertices.resize(nv);
+    for (Vec3& v : b.vertices) v = {r.le<double>(), r.le<double>(), r.le<double>()};
+    r.need_items(uint64_t(nt) * 3, 4, "triangles");
+    b.triangles.resize(nt);
+    for (auto& t : b.triangles) t = {r.le<uint32_t>(), r.le<uint32_t>(), r.le<uint32_t>()};
+    r.need_items(uint64_t(nv) * 3, 4, "normals");
+    b.normals.resize(nv);
+    for (auto& q : b.normals) q = {r.le<float>(), r.le<float>(), r.le<float>()};
+    r.expect_end();
+  }
+  {
+    Reader r = section(kShap);
+    const auto n = r.le<uint32_t>(), nv = r.le<uint32_t>();
+    if (n != b.omega.size() || nv != b.vertices.size())
+      r.fail("holds " + std::to_string(n) + " modes x " + std::to_string(nv) +
+             " vertices, but the bank has " + std::to_string(b.omega.size()) + " modes and " +
+             std::to_string(b.vertices.size()) + " vertices");
+    r.need_items(uint64_t(n) * nv * 3, 4, "shape values");
+    b.shapes.resize(std::size_t(n) * nv * 3);
+    for (float& s : b.shapes) s = r.le<float>();
+    r.expect_end();
+  }
+  if (auto it = found.find(kXfer); it != found.end())
+    b.transfer.assign(it->second.first, it->second.first + it->second.second);
+  try {
+    b.validate();
+  } catch (const InputError& e) {
+    throw InputError(who + ": " + e.what());
+  }
+  return b;
+}
+
+void write_soundbank(const std::string& path, const Soundbank& bank) {
+  const std::vector<uint8_t> bytes = serialize_soundbank(bank);
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
+    if (!f) throw InputError("cannot write soundbank " + path + ": cannot open " + tmp);
+    f.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
+    if (!f.flush()) throw InputError("cannot write soundbank " + path + ": write failed");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw InputError("cannot write soundbank " + path + ": " + ec.message());
+  }
+}
+
+Soundbank read_soundbank(const std::string& path) {
+  std::ifstream f(path, std::ios::binary | std::ios::ate);
+  if (!f) throw InputError("soundbank " + path + ": cannot open file");
+  const std::streamoff size = f.tellg();
+  if (size < 0) throw InputError("soundbank " + path + ": cannot read file");
+  std::vector<uint8_t> bytes(static_cast<std::size_t>(size));
+  f.seekg(0);
+  f.read(reinterpret_cast<char*>(bytes.data()), size);
+  if (!f) throw InputError("soundbank " + path + ": read failed");
+  return parse_soundbank(bytes, path);
+}
+
+ModalModel to_modal_model(const Soundbank& b, const std::string& name) {
+  constexpr double rho0 = 1.204, c0 = 343.0;
+  ModalModel m;
+  m.name = name;
+  m.omega = b.omega;
+  m.decay = b.decay;
+  m.points = b.vertices;
+  const std::size_t nv = b.vertices.size();
+  for (const auto& q : b.normals) m.normals.push_back({q[0], q[1], q[2]});
+  m.shapes.resize(b.omega.size() * nv);
+  for (std::size_t k = 0; k < m.shapes.size(); ++k)
+    m.shapes[k] = {b.shapes[3 * k], b.shapes[3 * k + 1], b.shapes[3 * k + 2]};
+  // Area-weighted vertex normals dA_v n_v, and the centroid, for the surface moments.
+  std::vector<Vec3> an(nv, Vec3{0, 0, 0});
+  Vec3 c{0, 0, 0};
+  for (const Vec3& v : b.vertices)
+    for (int k = 0; k < 3; ++k) c[k] += v[k] / double(nv);
+  for (const auto& t : b.triangles) {
+    const Vec3 n2 = triangle_normal(b.vertices[t[0]], b.vertices[t[1]], b.vertices[t[2]]);
+    for (uint32_t v : t)
+      for (int k = 0; k < 3; ++k) an[v][k] += n2[k] / 6.0;  // (area vector) / 3 per corner
+  }
+  for (std::size_t i = 0; i < b.omega.size(); ++i) {
+    double Q = 0;
+    Vec3 D{0, 0, 0};
+    for (std::size_t v = 0; v < nv; ++v) {
+      const Vec3& s = m.shapes[i * nv + v];
+      const double un = s[0] * an[v][0] + s[1] * an[v][1] + s[2] * an[v][2];
+      Q += un;
+      for (int k = 0; k < 3; ++k) D[k] += (b.vertices[v][k] - c[k]) * un;
+    }
+    const double k = b.omega[i] / c0;
+    const double d2 = D[0] * D[0] + D[1] * D[1] + D[2] * D[2];
+    m.radiation.push_back(rho0 / (4 * std::numbers::pi) * std::sqrt(Q * Q + k * k * d2 / 3.0));
+  }
+  return m;
+}
+
+}  // namespace chladni

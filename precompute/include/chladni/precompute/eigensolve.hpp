@@ -1,0 +1,43 @@
+#pragma once
+// The generalized symmetric eigenproblem K v = lambda M v by shift-invert Lanczos (Spectra) over a
+// sparse Cholesky factorization of K - sigma M (CHOLMOD when built with it, else Eigen's
+// SimplicialLDLT). Only eigensolve.cpp includes Spectra and CHOLMOD.
+#include <functional>
+#include <string>
+
+#include "chladni/precompute/fem.hpp"
+
+namespace chladni::precompute {
+
+struct EigenOptions {
+  std::size_t modes = 0;         ///< first N elastic modes; 0: all below max_frequency
+  double max_frequency = 20000;  ///< Hz, undamped; used when modes == 0
+  std::size_t mode_cap = 2000;   ///< most elastic modes ever computed
+  double shift_hz = 20;          ///< sigma = -(2 pi shift_hz)^2: below zero, so K - sigma M is SPD
+  double tolerance = 1e-10;      ///< Spectra's relative Ritz tolerance
+};
+
+struct EigenResult {
+  std::vector<double> lambda;    ///< omega^2 of the elastic modes, ascending
+  Eigen::MatrixXd vectors;       ///< M-normalized, one column per elastic mode
+  std::vector<double> residual;  ///< ||K v - lambda M v|| / ||K v||
+  std::size_t rigid_removed = 0;
+  std::vector<double> rigid_lambda;  ///< eigenvalues of the removed rigid modes
+  std::size_t solves = 0;            ///< Lanczos runs (more than one when the band grew)
+  std::size_t operations = 0;        ///< triangular solves
+  bool capped = false;               ///< mode_cap stopped the search below max_frequency
+  std::string factorization;         ///< "CHOLMOD supernodal LLT" or "Eigen SimplicialLDLT"
+  double shift = 0;                  ///< sigma used (rad^2/s^2)
+  double factor_seconds = 0, lanczos_seconds = 0;
+};
+
+/// `rigid` holds the six rigid-body motions (rigid_body_modes): computed modes whose M-weighted
+/// projection onto them exceeds 1/2 are rigid; exactly six must be found, and none may be kept.
+EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eigen::MatrixXd& rigid,
+                        const EigenOptions& options,
+                        const std::function<void(const std::string&)>& status = {});
+
+/// Which factorization solve_modes uses in this build.
+std::string factorization_name();
+
+}  // namespace chladni::precompute

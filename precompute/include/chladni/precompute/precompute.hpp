@@ -1,0 +1,70 @@
+#pragma once
+// The whole pipeline for one asset: mesh file -> checked (and repaired) surface -> tetrahedra ->
+// K, M -> eigenmodes -> damping and band limits -> soundbank.
+#include <functional>
+#include <string>
+
+#include "chladni/core/soundbank.hpp"
+#include "chladni/precompute/eigensolve.hpp"
+#include "chladni/precompute/fem.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+#include "chladni/precompute/tet_mesh.hpp"
+
+namespace chladni::precompute {
+
+struct PrecomputeOptions {
+  double scale = 1.0;  ///< coordinates times scale = metres (unit and --scale combined)
+  bool repair = false;
+  std::string save_surface;  ///< when set, the checked (repaired) surface is written here as OBJ
+  RepairOptions repair_options;
+  Material material = find_material("steel");
+  int order = 2;  ///< quadratic tets by default: linear ones lock in bending (docs/validation.md)
+  MassKind mass = MassKind::Consistent;
+  std::size_t max_modes = 0;  ///< 0: every mode below max_frequency
+  double max_frequency = 20000;
+  double min_frequency = 20;
+  double sample_rate = 48000;  ///< damped frequencies above sample_rate / 2 are dropped
+  double max_tet_volume = 0;   ///< m^3; 0: from max_frequency (auto_max_volume)
+  TetOptions tet;
+  int threads = 0;
+  std::size_t mode_cap = 2000;
+};
+
+struct StageTime {
+  std::string name;
+  double seconds = 0;
+};
+
+struct PrecomputeReport {
+  MeshReport mesh;
+  std::vector<std::string> repairs;
+  double max_tet_volume = 0;
+  std::size_t tets = 0, nodes = 0, dofs = 0, nonzeros = 0;
+  TetQuality quality;
+  EigenResult eigen;  ///< vectors are released after use
+  std::size_t computed = 0, overdamped = 0, below_band = 0, above_band = 0, kept = 0;
+  double max_residual = 0;
+  std::vector<StageTime> stages;
+  double total_seconds = 0;
+};
+
+/// Hooks for a progress display: a stage starts (name), a fraction of it is done, a note.
+struct Progress {
+  std::function<void(const std::string&)> stage;
+  std::function<void(double)> fraction;
+  std::function<void(const std::string&)> note;
+};
+
+/// Runs the pipeline on `mesh_path`. Throws InputError for a bad mesh, material or option.
+Soundbank precompute_mesh(const std::string& mesh_path, const PrecomputeOptions& options,
+                          PrecomputeReport& report, const Progress& progress = {});
+
+/// The same from a surface already in memory (in metres); `origin` names it in messages.
+Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
+                             const PrecomputeOptions& options, PrecomputeReport& report,
+                             const Progress& progress = {});
+
+/// Outward unit vertex normals, area-weighted.
+std::vector<std::array<float, 3>> vertex_normals(const SurfaceMesh& mesh);
+
+}  // namespace chladni::precompute

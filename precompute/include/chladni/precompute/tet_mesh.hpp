@@ -1,0 +1,48 @@
+#pragma once
+// Volume meshing with TetGen (only tetrahedralize.cpp includes tetgen.h).
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "chladni/core/material.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+
+namespace chladni::precompute {
+
+struct TetMesh {
+  std::vector<Vec3> nodes;
+  std::vector<std::array<uint32_t, 4>> tets;  ///< positively oriented
+  /// nodes[0, surface_vertices) are the input surface's vertices in their order: TetGen runs with
+  /// -Y (no Steiner points on the surface; without it TetGen 1.5 can abort on poor surfaces).
+  std::size_t surface_vertices = 0;
+  /// The boundary triangles, outward, indexing nodes[0, surface_vertices).
+  std::vector<std::array<uint32_t, 3>> surface_triangles;
+};
+
+struct TetOptions {
+  double max_volume = 0;         ///< m^3; 0: no volume bound
+  double max_radius_edge = 1.6;  ///< TetGen -q bound on circumradius / shortest edge
+  double min_dihedral_deg = 10;  ///< TetGen -q dihedral bound
+};
+
+struct TetQuality {
+  double max_radius_edge = 0;  ///< worst circumradius / shortest edge (regular tet: 0.612)
+  double mean_radius_edge = 0;
+  double min_dihedral_deg = 0;  ///< smallest dihedral angle of any tet (regular: 70.5)
+  double volume = 0;            ///< total, m^3
+};
+
+/// Quality tetrahedralization of a valid closed surface. Throws InputError with TetGen's reason
+/// when it refuses the surface.
+TetMesh tetrahedralize(const SurfaceMesh& surface, const TetOptions& options);
+
+TetQuality tet_quality(const TetMesh& mesh);
+
+/// Largest tet volume that resolves the shortest wave of interest: the shear wavelength at
+/// `max_frequency` divided by `per_wavelength` (12 for linear, 6 for quadratic elements) gives
+/// the edge length h, and a regular tet of edge h has volume h^3 / (6 sqrt 2). Also bounded so
+/// that the object's bounding box holds at least a few hundred elements.
+double auto_max_volume(const Material& material, double max_frequency, int order,
+                       const SurfaceMesh& surface);
+
+}  // namespace chladni::precompute

@@ -1,0 +1,351 @@
+// Surface checks and repairs with CGAL Polygon Mesh Processing (one of the two CGAL units).
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/border.h>
+#include <CGAL/Polygon_mesh_processing/connected_components.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
+#include <CGAL/Polygon_mesh_processing/polygon_mesh_to_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/remesh.h>
+#include <CGAL/Polygon_mesh_processing/repair.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/repair_self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Polygon_mesh_processing/stitch_borders.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+#include "chladni/core/error.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+
+namespace chladni::precompute {
+namespace {
+
+using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Point = Kernel::Point_3;
+using Mesh = CGAL::Surface_mesh<Point>;
+namespace PMP = CGAL::Polygon_mesh_processing;
+constexpr std::size_t kExamples = 5;
+
+struct UnionFind {
+  std::vector<std::size_t> parent;
+  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
+  std::size_t find(std::size_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
+};
+
+std::vector<Point> to_points(const SurfaceMesh& m) {
+  std::vector<Point> p;
+  p.reserve(m.vertices.size());
+  for (const Vec3& v : m.vertices) p.emplace_back(v[0], v[1], v[2]);
+  return p;
+}
+
+std::vector<std::vector<std::size_t>> to_polygons(const SurfaceMesh& m) {
+  std::vector<std::vector<std::size_t>> polys;
+  polys.reserve(m.triangles.size());
+  for (const auto& t : m.triangles) polys.push_back({t[0], t[1], t[2]});
+  return polys;
+}
+
+SurfaceMesh from_mesh(const Mesh& mesh) {
+  std::vector<Point> points;
+  std::vector<std::vector<std::size_t>> polys;
+  PMP::polygon_mesh_to_polygon_soup(mesh, points, polys);
+  SurfaceMesh out;
+  for (const Point& p : points) out.vertices.push_back({p.x(), p.y(), p.z()});
+  for (const auto& poly : polys)
+    for (std::size_t k = 1; k + 1 < poly.size(); ++k)
+      out.triangles.push_back({uint32_t(poly[0]), uint32_t(poly[k]), uint32_t(poly[k + 1])});
+  return out;
+}
+
+template <class T>
+void note(std::vector<T>& examples, const T& item) {
+  if (examples.size() < kExamples) examples.push_back(item);
+}
+
+std::string edges_text(const std::vector<std::pair<uint32_t, uint32_t>>& e) {
+  std::ostringstream os;
+  for (std::size_t k = 0; k < e.size(); ++k)
+    os << (k ? ", " : "") << e[k].first << "-" << e[k].second;
+  return os.str();
+}
+
+}  // namespace
+
+std::vector<std::string> MeshReport::problems() const {
+  std::vector<std::string> out;
+  auto list = [](const auto& v) {
+    std::ostringstream os;
+    for (std::size_t k = 0; k < v.size(); ++k) os << (k ? ", " : "") << v[k];
+    return os.str();
+  };
+  if (triangles == 0) out.push_back("no triangles");
+  if (nonfinite_vertices)
+    out.push_back(std::to_string(nonfinite_vertices) + " non-finite vertices");
+  if (degenerate_faces)
+    out.push_back(std::to_string(degenerate_faces) + " degenerate faces (zero area), e.g. faces " +
+                  list(degenerate_examples));
+  if (boundary_edges)
+    out.push_back("not closed: " + std::to_string(boundary_edges) +
+                  " boundary edges (in one face only), e.g. edges " +
+                  edges_text(boundary_examples));
+  if (non_manifold_edges)
+    out.push_back("not 2-manifold: " + std::to_string(non_manifold_edges) +
+                  " edges shared by more than two faces, e.g. " +
+                  edges_text(non_manifold_edge_examples));
+  if (non_manifold_vertices)
+    out.push_back("not 2-manifold: " + std::to_string(non_manifold_vertices) +
+                  " vertices whose faces form more than one fan, e.g. vertices " +
+                  list(non_manifold_vertex_examples));
+  if (inconsistent_edges)
+    out.push_back("inconsistently oriented: " + std::to_string(inconsistent_edges) +
+                  " edges used twice in the same direction, e.g. " +
+                  edges_text(inconsistent_examples));
+  if (self_intersections) {
+    std::ostringstream os;
+    os << self_intersections << " pairs of faces intersect, e.g. faces";
+    for (std::size_t k = 0; k < self_intersection_examples.size(); ++k)
+      os << (k ? "," : "") << " (" << self_intersection_examples[k].first << ", "
+         << self_intersection_examples[k].second << ")";
+    out.push_back(os.str());
+  }
+  if (components > 1)
+    out.push_back(std::to_string(components) + " separate pieces (expected one solid)");
+  const bool topology_ok =
+      !boundary_edges && !non_manifold_edges && !inconsistent_edges && triangles;
+  if (topology_ok && !(volume > 0)) {
+    std::ostringstream os;
+    os << "signed volume " << volume << " m^3 is not positive (faces wound inward)";
+    out.push_back(os.str());
+  }
+  return out;
+}
+
+MeshReport check_mesh(const SurfaceMesh& m) {
+  MeshReport r;
+  r.vertices = m.vertices.size();
+  r.triangles = m.triangles.size();
+  r.bbox_min = {INFINITY, INFINITY, INFINITY};
+  r.bbox_max = {-INFINITY, -INFINITY, -INFINITY};
+  for (const Vec3& v : m.vertices) {
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+      ++r.nonfinite_vertices;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k)
+      r.bbox_min[k] = std::min(r.bbox_min[k], v[k]), r.bbox_max[k] = std::max(r.bbox_max[k], v[k]);
+  }
+  if (r.nonfinite_vertices || m.triangles.empty()) return r;
+  const std::vector<Point> pts = to_points(m);
+
+  // Directed edge uses: a manifold, consistently oriented closed surface uses every edge once in
+  // each direction.
+  std::map<std::pair<uint32_t, uint32_t>, std::pair<int, int>>
+      edges;  // (lo, hi) -> (lo->hi, hi->lo)
+  UnionFind faces(m.triangles.size());
+  std::map<std::pair<uint32_t, uint32_t>, std::size_t> first_face;
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
+    const auto& t = m.triangles[f];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
+        CGAL::collinear(pts[t[0]], pts[t[1]], pts[t[2]])) {
+      ++r.degenerate_faces;
+      note(r.degenerate_examples, f);
+    }
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      if (a == b) continue;
+      const auto key = std::minmax(a, b);
+      auto& uses = edges[key];
+      (a < b ? uses.first : uses.second)++;
+      auto [it, fresh] = first_face.emplace(key, f);
+      if (!fresh) faces.unite(f, it->second);
+    }
+  }
+  for (const auto& [e, uses] : edges) {
+    const int total = uses.first + uses.second;
+    if (total == 1) {
+      ++r.boundary_edges;
+      note(r.boundary_examples, e);
+    } else if (total > 2) {
+      ++r.non_manifold_edges;
+      note(r.non_manifold_edge_examples, e);
+    } else if (uses.first != 1) {
+      ++r.inconsistent_edges;
+      note(r.inconsistent_examples, e);
+    }
+  }
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) r.components += faces.find(f) == f;
+
+  // Vertex fans: the faces around a manifold vertex are connected through edges at that vertex.
+  std::vector<std::vector<std::size_t>> around(m.vertices.size());
+  for (std::size_t f = 0; f < m.triangles.size(); ++f)
+    for (uint32_t v : m.triangles[f]) around[v].push_back(f);
+  for (uint32_t v = 0; v < around.size(); ++v) {
+    const auto& fs = around[v];
+    if (fs.size() < 2) continue;
+    UnionFind fan(fs.size());
+    std::map<uint32_t, std::size_t> via;  // other endpoint -> first local face
+    for (std::size_t i = 0; i < fs.size(); ++i)
+      for (uint32_t w : m.triangles[fs[i]]) {
+        if (w == v) continue;
+        auto [it, fresh] = via.emplace(w, i);
+        if (!fresh) fan.unite(i, it->second);
+      }
+    std::size_t groups = 0;
+    for (std::size_t i = 0; i < fs.size(); ++i) groups += fan.find(i) == i;
+    if (groups > 1) {
+      ++r.non_manifold_vertices;
+      note(r.non_manifold_vertex_examples, v);
+    }
+  }
+
+  // Signed volume by the divergence theorem (sum of signed tetrahedra to the origin).
+  double vol = 0;
+  for (const auto& t : m.triangles) {
+    const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
+    vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+            a[2] * (b[0] * c[1] - b[1] * c[0])) /
+           6.0;
+  }
+  r.volume = vol;
+
+  // Self-intersections need a halfedge structure: only when the soup is a valid polygon mesh.
+  const auto polys = to_polygons(m);
+  if (!r.non_manifold_edges && !r.non_manifold_vertices && !r.inconsistent_edges &&
+      !r.degenerate_faces && PMP::is_polygon_soup_a_polygon_mesh(polys)) {
+    Mesh mesh;
+    PMP::polygon_soup_to_polygon_mesh(pts, polys, mesh);
+    std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+    PMP::self_intersections<CGAL::Parallel_if_available_tag>(mesh, std::back_inserter(pairs));
+    r.self_intersections_checked = true;
+    r.self_intersections = pairs.size();
+    for (const auto& [a, b] : pairs)  // faces are created in soup order
+      note(r.self_intersection_examples,
+           std::make_pair(std::size_t(a.idx()), std::size_t(b.idx())));
+  }
+  return r;
+}
+
+void require_valid(const MeshReport& report, const std::string& origin, bool after_repair) {
+  const auto problems = report.problems();
+  if (problems.empty()) return;
+  std::string msg = origin + ": mesh is not a valid closed solid" +
+                    (after_repair ? " even after --repair" : "") + ":";
+  for (const std::string& p : problems) msg += "\n  - " + p;
+  if (!after_repair) msg += "\n  (try --repair; indices are 0-based)";
+  throw InputError(msg);
+}
+
+std::vector<std::string> repair_mesh(SurfaceMesh& m, const RepairOptions& options) {
+  std::vector<std::string> log;
+  auto say = [&](const std::string& s) { log.push_back(s); };
+  std::vector<Point> points = to_points(m);
+  std::vector<std::vector<std::size_t>> polys = to_polygons(m);
+  const std::size_t v0 = points.size(), f0 = polys.size();
+
+  PMP::repair_polygon_soup(points, polys);
+  if (points.size() != v0 || polys.size() != f0)
+    say("merged duplicate vertices and dropped degenerate or duplicate triangles: " +
+        std::to_string(v0) + " -> " + std::to_string(points.size()) + " vertices, " +
+        std::to_string(f0) + " -> " + std::to_string(polys.size()) + " triangles");
+  const std::size_t v1 = points.size();
+  if (!PMP::orient_polygon_soup(points, polys))
+    say("oriented the triangles consistently; " + std::to_string(points.size() - v1) +
+        " non-manifold vertices were split");
+  Mesh mesh;
+  PMP::polygon_soup_to_polygon_mesh(points, polys, mesh);
+
+  if (const std::size_t n = PMP::stitch_borders(mesh))
+    say("stitched " + std::to_string(n) + " pairs of coincident border edges");
+  const std::size_t faces_before = mesh.number_of_faces();
+  PMP::remove_degenerate_faces(mesh);
+  mesh.collect_garbage();
+  if (mesh.number_of_faces() != faces_before)
+    say("removed " + std::to_string(faces_before - mesh.number_of_faces()) + " degenerate faces");
+
+  // Fill holes bounded by at most max_hole_edges edges (one representative halfedge per cycle).
+  std::vector<Mesh::Halfedge_index> borders;
+  PMP::extract_boundary_cycles(mesh, std::back_inserter(borders));
+  std::size_t filled = 0, left = 0, hole_faces = 0;
+  for (auto h : borders) {
+    std::size_t len = 0;
+    for (auto hh : CGAL::halfedges_around_face(h, mesh)) (void)hh, ++len;
+    if (len > options.max_hole_edges) {
+      ++left;
+      continue;
+    }
+    std::vector<Mesh::Face_index> added;
+    PMP::triangulate_and_refine_hole(mesh, h, std::back_inserter(added), CGAL::Emptyset_iterator());
+    hole_faces += added.size();
+    ++filled;
+  }
+  if (filled)
+    say("filled " + std::to_string(filled) + " holes with " + std::to_string(hole_faces) +
+        " triangles");
+  if (left)
+    say("left " + std::to_string(left) + " holes larger than " +
+        std::to_string(options.max_hole_edges) + " edges open");
+
+  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+  PMP::self_intersections(mesh, std::back_inserter(pairs));
+  if (!pairs.empty()) {
+    const bool cleaned =
+        PMP::experimental::remove_self_intersections(mesh, CGAL::parameters::preserve_genus(false));
+    mesh.collect_garbage();
+    std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> after;
+    PMP::self_intersections(mesh, std::back_inserter(after));
+    say("self-intersections: " + std::to_string(pairs.size()) + " face pairs -> " +
+        std::to_string(after.size()) + (cleaned ? "" : " (CGAL could not remove them all)"));
+  }
+  const std::size_t faces_all = mesh.number_of_faces();
+  if (const std::size_t dropped = PMP::keep_largest_connected_components(mesh, 1)) {
+    mesh.collect_garbage();
+    say("removed " + std::to_string(dropped) + " small separate pieces (" +
+        std::to_string(faces_all - mesh.number_of_faces()) + " triangles), keeping the largest");
+  }
+  // Needle and sliver triangles (typical after hole filling and self-intersection removal) force
+  // sliver tetrahedra; remesh the surface isotropically at its mean edge length when any are left.
+  double min_angle = 180, edge_sum = 0;
+  for (auto f : mesh.faces()) {
+    Point p[3];
+    int k = 0;
+    for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) p[k++] = mesh.point(v);
+    for (int c = 0; c < 3; ++c) {
+      const auto u = p[(c + 1) % 3] - p[c], w = p[(c + 2) % 3] - p[c];
+      const double cosang = u * w / std::sqrt(u.squared_length() * w.squared_length());
+      min_angle = std::min(min_angle, std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / M_PI);
+      edge_sum += std::sqrt(u.squared_length());
+    }
+  }
+  if (min_angle < options.min_angle_deg && CGAL::is_closed(mesh)) {
+    const double target = edge_sum / (3.0 * mesh.number_of_faces());
+    const std::size_t before = mesh.number_of_faces();
+    PMP::isotropic_remeshing(faces(mesh), target, mesh, CGAL::parameters::number_of_iterations(3));
+    mesh.collect_garbage();
+    char buf[160];
+    std::snprintf(
+        buf, sizeof buf,
+        "remeshed the surface isotropically (smallest angle %.2f deg; edge %.3g m): %zu -> "
+        "%zu triangles",
+        min_angle, target, before, std::size_t(mesh.number_of_faces()));
+    say(buf);
+  }
+  if (CGAL::is_closed(mesh) && !PMP::is_outward_oriented(mesh)) {
+    PMP::reverse_face_orientations(mesh);
+    say("reversed all faces to point outward");
+  }
+  m = from_mesh(mesh);
+  return log;
+}
+
+}  // namespace chladni::precompute

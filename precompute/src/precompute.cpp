@@ -1,0 +1,177 @@
+#include "chladni/precompute/precompute.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <numbers>
+
+#include "chladni/core/error.hpp"
+
+namespace chladni::precompute {
+namespace {
+
+class Stopwatch {
+ public:
+  Stopwatch(PrecomputeReport& r, const Progress& p) : r_(r), p_(p) {}
+  void start(const std::string& name) {
+    stop();
+    name_ = name;
+    t0_ = std::chrono::steady_clock::now();
+    if (p_.stage) p_.stage(name);
+  }
+  void stop() {
+    if (name_.empty()) return;
+    r_.stages.push_back(
+        {name_, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count()});
+    name_.clear();
+  }
+
+ private:
+  PrecomputeReport& r_;
+  const Progress& p_;
+  std::string name_;
+  std::chrono::steady_clock::time_point t0_;
+};
+
+}  // namespace
+
+std::vector<std::array<float, 3>> vertex_normals(const SurfaceMesh& m) {
+  std::vector<Vec3> acc(m.vertices.size(), Vec3{0, 0, 0});
+  for (const auto& t : m.triangles) {
+    const Vec3 n = triangle_normal(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
+    for (uint32_t v : t)
+      for (int k = 0; k < 3; ++k) acc[v][k] += n[k];
+  }
+  std::vector<std::array<float, 3>> out(acc.size());
+  for (std::size_t v = 0; v < acc.size(); ++v) {
+    const double l =
+        std::sqrt(acc[v][0] * acc[v][0] + acc[v][1] * acc[v][1] + acc[v][2] * acc[v][2]);
+    if (!(l > 0))
+      throw InputError("surface vertex " + std::to_string(v) +
+                       " belongs to no face of positive area");
+    out[v] = {float(acc[v][0] / l), float(acc[v][1] / l), float(acc[v][2] / l)};
+  }
+  return out;
+}
+
+Soundbank precompute_mesh(const std::string& mesh_path, const PrecomputeOptions& o,
+                          PrecomputeReport& r, const Progress& p) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (p.stage) p.stage("read mesh");
+  SurfaceMesh surface = read_mesh(mesh_path, o.scale);
+  const auto read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  Soundbank bank = precompute_surface(std::move(surface), mesh_path, o, r, p);
+  r.stages.insert(r.stages.begin(), StageTime{"read mesh", read_s});
+  r.total_seconds += read_s;
+  return bank;
+}
+
+Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
+                             const PrecomputeOptions& o, PrecomputeReport& r, const Progress& p) {
+  const auto t_begin = std::chrono::steady_clock::now();
+  o.material.validate();
+  if (o.order != 1 && o.order != 2) throw InputError("--order must be 1 or 2");
+  if (!(o.max_frequency > o.min_frequency) || !(o.min_frequency >= 0) ||
+      !std::isfinite(o.max_frequency))
+    throw InputError("--max-freq must be finite and above the 20 Hz floor");
+  if (!(o.max_tet_volume >= 0) || !std::isfinite(o.max_tet_volume))
+    throw InputError("--max-tet-volume must be finite and >= 0");
+  Stopwatch sw(r, p);
+
+  sw.start("check surface");
+  if (o.repair) {
+    r.repairs = repair_mesh(surface, o.repair_options);
+    if (p.note)
+      for (const auto& line : r.repairs) p.note("repair: " + line);
+  }
+  r.mesh = check_mesh(surface);
+  if (!o.save_surface.empty()) write_obj(o.save_surface, surface);
+  require_valid(r.mesh, origin, o.repair);
+
+  sw.start("tetrahedralize");
+  TetOptions topt = o.tet;
+  r.max_tet_volume = o.max_tet_volume > 0
+                         ? o.max_tet_volume
+                         : auto_max_volume(o.material, o.max_frequency, o.order, surface);
+  topt.max_volume = r.max_tet_volume;
+  const TetMesh tets = tetrahedralize(surface, topt);
+  r.quality = tet_quality(tets);
+  r.tets = tets.tets.size();
+  surface.vertices.assign(tets.nodes.begin(), tets.nodes.begin() + tets.surface_vertices);
+  surface.triangles = tets.surface_triangles;
+
+  sw.start("assemble");
+  const FemMesh fem = make_fem_mesh(tets, o.order);
+  r.nodes = fem.nodes.size();
+  r.dofs = fem.dofs();
+  FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
+  r.nonzeros = std::size_t(km.K.nonZeros());
+
+  sw.start("eigen-solve");
+  EigenOptions eo;
+  eo.modes = o.max_modes;
+  eo.max_frequency = o.max_frequency;
+  eo.mode_cap = o.mode_cap;
+  r.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
+  km = FemMatrices{};  // release before building the bank
+  r.computed = r.eigen.lambda.size();
+  for (double res : r.eigen.residual) r.max_residual = std::max(r.max_residual, res);
+
+  sw.start("damping and soundbank");
+  ModalModel model;
+  for (double l : r.eigen.lambda) model.omega.push_back(std::sqrt(std::max(l, 0.0)));
+  const ModeSelection sel =
+      apply_damping(model, o.material.damping, o.min_frequency, o.max_frequency, o.sample_rate);
+  r.overdamped = sel.overdamped, r.below_band = sel.below_band, r.above_band = sel.above_band;
+  r.kept = sel.kept.size();
+  if (sel.kept.empty()) {
+    std::string lowest = model.omega.empty()
+                             ? "none computed"
+                             : std::to_string(model.omega[0] / (2 * std::numbers::pi)) + " Hz";
+    throw InputError(origin + ": no mode lies in [" + std::to_string(int(o.min_frequency)) +
+                     " Hz, " + std::to_string(int(std::min(o.max_frequency, o.sample_rate / 2))) +
+                     " Hz] (lowest elastic mode: " + lowest + "; " +
+                     std::to_string(sel.overdamped) +
+                     " overdamped): check --unit/--scale, the material, or raise --max-freq");
+  }
+
+  Soundbank bank;
+  bank.material = o.material;
+  bank.vertices = surface.vertices;
+  bank.triangles = surface.triangles;
+  bank.normals = vertex_normals(surface);
+  const std::size_t nv = surface.vertices.size();
+  bank.shapes.reserve(sel.kept.size() * nv * 3);
+  for (std::size_t i : sel.kept) {
+    bank.omega.push_back(model.omega[i]);
+    bank.decay.push_back(model.decay[i]);
+    bank.residual.push_back(float(r.eigen.residual[i]));
+    const auto col = r.eigen.vectors.col(Eigen::Index(i));
+    for (std::size_t v = 0; v < nv; ++v)
+      for (int k = 0; k < 3; ++k) bank.shapes.push_back(float(col(Eigen::Index(3 * v + k))));
+  }
+  r.eigen.vectors.resize(0, 0);
+  sw.stop();
+  r.total_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
+
+  nlohmann::json meta;
+  meta["generator"] = "chladni 0.1.0";
+  meta["source"] = origin;
+  meta["element_order"] = o.order;
+  meta["mass"] = o.mass == MassKind::Lumped ? "lumped" : "consistent";
+  meta["max_frequency_hz"] = o.max_frequency;
+  meta["sample_rate_hz"] = o.sample_rate;
+  meta["tetrahedra"] = r.tets;
+  meta["nodes"] = r.nodes;
+  meta["max_tet_volume_m3"] = r.max_tet_volume;
+  meta["factorization"] = r.eigen.factorization;
+  meta["modes_dropped"] = {
+      {"overdamped", r.overdamped}, {"below_band", r.below_band}, {"above_band", r.above_band}};
+  meta["repairs"] = r.repairs;
+  bank.metadata_json = meta.dump();
+  bank.validate();
+  return bank;
+}
+
+}  // namespace chladni::precompute

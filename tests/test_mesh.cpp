@@ -1,0 +1,253 @@
+// Mesh reading in four formats, the validity checks on good and broken meshes, and repair.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "chladni/core/error.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+#include "chladni/precompute/tet_mesh.hpp"
+
+using namespace chladni;
+using namespace chladni::precompute;
+
+namespace {
+
+const std::string kMeshes = CHLADNI_SHARED_MESHES;
+
+std::string temp(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / name).string();
+}
+std::string write(const std::string& name, const std::string& text) {
+  const std::string p = temp(name);
+  std::ofstream(p) << text;
+  return p;
+}
+
+// Unit cube, outward counter-clockwise triangles.
+const double kCubeV[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                             {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+const int kCubeF[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                           {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+
+std::string cube_obj() {
+  std::string s = "# cube\n";
+  for (auto& v : kCubeV)
+    s += "v " + std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) +
+         "\n";
+  for (auto& f : kCubeF)
+    s += "f " + std::to_string(f[0] + 1) + " " + std::to_string(f[1] + 1) + " " +
+         std::to_string(f[2] + 1) + "\n";
+  return s;
+}
+
+SurfaceMesh cube() {
+  return read_mesh(write("chladni_cube.obj", cube_obj()));
+}
+
+std::string message_of(const SurfaceMesh& m) {
+  try {
+    require_valid(check_mesh(m), "m.obj", false);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(MeshIo, ReadsTheSameCubeFromObjOffPlyAndStl) {
+  std::string off = "OFF\n8 12 0\n", ply, stl = "solid cube\n";
+  for (auto& v : kCubeV)
+    off += std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) + "\n";
+  for (auto& f : kCubeF)
+    off += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
+           "\n";
+  ply =
+      "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float "
+      "z\n"
+      "element face 12\nproperty list uchar int vertex_indices\nend_header\n";
+  for (auto& v : kCubeV)
+    ply += std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) + "\n";
+  for (auto& f : kCubeF)
+    ply += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
+           "\n";
+  for (auto& f : kCubeF) {
+    stl += "facet normal 0 0 0\nouter loop\n";
+    for (int k = 0; k < 3; ++k)
+      stl += "vertex " + std::to_string(kCubeV[f[k]][0]) + " " + std::to_string(kCubeV[f[k]][1]) +
+             " " + std::to_string(kCubeV[f[k]][2]) + "\n";
+    stl += "endloop\nendfacet\n";
+  }
+  stl += "endsolid cube\n";
+  for (const auto& [name, text] : {std::pair<std::string, std::string>{"c.obj", cube_obj()},
+                                   {"c.off", off},
+                                   {"c.ply", ply},
+                                   {"c.STL", stl}}) {
+    const SurfaceMesh m = read_mesh(write("chladni_" + name, text), 0.01);
+    EXPECT_EQ(m.triangles.size(), 12u) << name;
+    const MeshReport r = check_mesh(m);
+    EXPECT_TRUE(r.ok()) << name << ": " << message_of(m);
+    EXPECT_NEAR(r.volume, 1e-6, 1e-12) << name;  // 1 cm cube
+  }
+}
+
+TEST(MeshIo, UnitsScaleCoordinates) {
+  EXPECT_DOUBLE_EQ(unit_scale("mm"), 0.001);
+  EXPECT_DOUBLE_EQ(unit_scale("cm"), 0.01);
+  EXPECT_THROW(unit_scale("inch"), InputError);
+  const SurfaceMesh m = read_mesh(write("chladni_cube_u.obj", cube_obj()), unit_scale("mm") * 2);
+  EXPECT_DOUBLE_EQ(m.vertices[6][0], 0.002);
+}
+
+TEST(MeshIo, UnreadableFilesNameTheProblem) {
+  auto msg = [](const std::string& path) {
+    try {
+      read_mesh(path);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(msg("/nonexistent/a.obj").find("no such mesh file"), std::string::npos);
+  EXPECT_NE(msg(write("chladni_x.xyz", "1 2 3\n")).find("unsupported mesh format"),
+            std::string::npos);
+  EXPECT_NE(msg(write("chladni_nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n"))
+                .find("chladni_nan.obj:3: vertex coordinate"),
+            std::string::npos);
+  EXPECT_NE(msg(write("chladni_bad.obj", "v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n"))
+                .find("chladni_bad.obj:2: 'zero' is not a number"),
+            std::string::npos);
+  EXPECT_FALSE(msg(write("chladni_idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")).empty());
+  EXPECT_FALSE(msg(write("chladni_garbage.off", "OFF\n3 1 0\n0 0 0\nhello\n")).empty());
+  EXPECT_FALSE(msg(write("chladni_empty.obj", "# nothing\n")).empty());
+}
+
+TEST(MeshCheck, BundledMeshesAreValidSolids) {
+  for (const char* name : {"bar.obj", "bowl.obj", "rotor.obj", "coupling.obj"}) {
+    const SurfaceMesh m = read_mesh(kMeshes + "/" + name);
+    const MeshReport r = check_mesh(m);
+    EXPECT_TRUE(r.ok()) << name << ": " << message_of(m);
+    EXPECT_TRUE(r.self_intersections_checked) << name;
+    EXPECT_EQ(r.components, 1u) << name;
+  }
+  EXPECT_NEAR(check_mesh(read_mesh(kMeshes + "/bar.obj")).volume, 9e-5, 1e-9);
+}
+
+TEST(MeshCheck, ElephantWithHolesIsRefusedWithCountsAndEdges) {
+  const SurfaceMesh m = read_mesh(kMeshes + "/broken/elephant_with_holes.obj");
+  const MeshReport r = check_mesh(m);
+  EXPECT_EQ(r.boundary_edges, 1353u);
+  EXPECT_EQ(r.self_intersections, 173u);
+  const std::string msg = message_of(m);
+  EXPECT_NE(msg.find("not closed: 1353 boundary edges"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("e.g. edges "), std::string::npos) << msg;
+  EXPECT_NE(msg.find("try --repair"), std::string::npos) << msg;
+}
+
+TEST(MeshCheck, SelfIntersectingTeapotIsRefusedWithFacePairs) {
+  const SurfaceMesh m = read_mesh(kMeshes + "/broken/teapot_solid_selfintersecting.obj");
+  const MeshReport r = check_mesh(m);
+  EXPECT_EQ(r.boundary_edges, 0u);
+  EXPECT_EQ(r.inconsistent_edges, 0u);
+  EXPECT_GT(r.volume, 0);
+  EXPECT_EQ(r.self_intersections, 35u);
+  EXPECT_NE(message_of(m).find("35 pairs of faces intersect, e.g. faces ("), std::string::npos);
+}
+
+TEST(MeshCheck, OrientationManifoldnessAndDegeneracyProblemsAreNamed) {
+  SurfaceMesh m = cube();
+  for (auto& t : m.triangles) std::swap(t[1], t[2]);  // all inward
+  EXPECT_NE(message_of(m).find("signed volume"), std::string::npos);
+  m = cube();
+  std::swap(m.triangles[3][1], m.triangles[3][2]);  // one face flipped
+  EXPECT_NE(message_of(m).find("inconsistently oriented: 3 edges"), std::string::npos)
+      << message_of(m);
+  m = cube();
+  m.triangles.push_back({0, 1, 6});  // a fin: edge 0-1 now in three faces
+  EXPECT_NE(message_of(m).find("edges shared by more than two faces"), std::string::npos);
+  m = cube();
+  m.vertices.push_back({0.5, 0, 0});
+  m.triangles.push_back({0, 1, 8});  // zero area
+  EXPECT_NE(message_of(m).find("degenerate faces (zero area), e.g. faces 12"), std::string::npos);
+  // Two cubes sharing only vertex 6: two pieces, one non-manifold vertex.
+  m = cube();
+  const SurfaceMesh c2 = cube();
+  for (const Vec3& v : c2.vertices) m.vertices.push_back({v[0] + 1, v[1] + 1, v[2] + 1});
+  for (auto t : c2.triangles) {
+    for (auto& i : t) i = i == 0 ? 6 : i + 8;
+    m.triangles.push_back(t);
+  }
+  const std::string two = message_of(m);
+  EXPECT_NE(two.find("vertices whose faces form more than one fan, e.g. vertices 6"),
+            std::string::npos)
+      << two;
+}
+
+TEST(MeshRepair, FixesOrientationAndReportsIt) {
+  SurfaceMesh m = cube();
+  for (auto& t : m.triangles) std::swap(t[1], t[2]);
+  const auto log = repair_mesh(m);
+  EXPECT_TRUE(check_mesh(m).ok()) << message_of(m);
+  ASSERT_FALSE(log.empty());
+  EXPECT_NE(log.back().find("reversed"), std::string::npos);
+}
+
+TEST(MeshRepair, StitchesDuplicatedVertices) {
+  // Every triangle with its own three vertices (as in STL files).
+  SurfaceMesh c = cube(), m;
+  for (const auto& t : c.triangles) {
+    const uint32_t base = uint32_t(m.vertices.size());
+    for (uint32_t v : t) m.vertices.push_back(c.vertices[v]);
+    m.triangles.push_back({base, base + 1, base + 2});
+  }
+  EXPECT_EQ(check_mesh(m).boundary_edges, 36u);
+  const auto log = repair_mesh(m);
+  EXPECT_TRUE(check_mesh(m).ok()) << message_of(m);
+  EXPECT_EQ(m.vertices.size(), 8u);
+}
+
+TEST(MeshRepair, BrokenSampleMeshesBecomeValidSolids) {
+  for (const char* name : {"elephant_with_holes.obj", "teapot_solid_selfintersecting.obj"}) {
+    SurfaceMesh m = read_mesh(kMeshes + std::string("/broken/") + name);
+    const auto log = repair_mesh(m);
+    EXPECT_FALSE(log.empty()) << name;
+    const MeshReport r = check_mesh(m);
+    EXPECT_TRUE(r.ok()) << name << ": " << message_of(m);
+  }
+}
+
+TEST(Tetrahedralize, PreservesTheSurfaceAndFillsTheVolume) {
+  const SurfaceMesh s = read_mesh(kMeshes + "/bar.obj");
+  TetOptions o;
+  o.max_volume = 2e-7;
+  const TetMesh t = tetrahedralize(s, o);
+  ASSERT_EQ(t.surface_vertices, s.vertices.size());
+  for (std::size_t v = 0; v < s.vertices.size(); ++v) ASSERT_EQ(t.nodes[v], s.vertices[v]);
+  EXPECT_EQ(t.surface_triangles.size(), s.triangles.size());
+  const TetQuality q = tet_quality(t);
+  EXPECT_NEAR(q.volume, 9e-5, 1e-12);
+  EXPECT_LE(q.max_radius_edge, 2.0);
+  EXPECT_GT(q.min_dihedral_deg, 5.0);
+  // Volume bound honoured (TetGen's -a).
+  const double max_v = 2e-7 * (1 + 1e-9);
+  for (const auto& tet : t.tets) {
+    const Vec3 &a = t.nodes[tet[0]], &b = t.nodes[tet[1]], &c = t.nodes[tet[2]],
+               &d = t.nodes[tet[3]];
+    const double v =
+        ((b[0] - a[0]) * ((c[1] - a[1]) * (d[2] - a[2]) - (c[2] - a[2]) * (d[1] - a[1])) -
+         (b[1] - a[1]) * ((c[0] - a[0]) * (d[2] - a[2]) - (c[2] - a[2]) * (d[0] - a[0])) +
+         (b[2] - a[2]) * ((c[0] - a[0]) * (d[1] - a[1]) - (c[1] - a[1]) * (d[0] - a[0]))) /
+        6;
+    ASSERT_GT(v, 0);
+    ASSERT_LE(v, max_v);
+  }
+}
+
+TEST(Tetrahedralize, AutoSizeShrinksWithFrequencyAndOrder) {
+  const SurfaceMesh s = cube();  // 1 m: the wavelength bound, not the box bound, decides
+  const Material steel = find_material("steel");
+  const double v1 = auto_max_volume(steel, 5000, 1, s), v2 = auto_max_volume(steel, 5000, 2, s);
+  EXPECT_NEAR(v1 / v2, 1.0 / 8, 1e-12);  // half the edge length for linear elements
+  EXPECT_NEAR(auto_max_volume(steel, 10000, 2, s) / v2, 1.0 / 8, 1e-12);
+}

@@ -1,0 +1,182 @@
+// Soundbank round trips, and corrupted or truncated files refused with the section named.
+#include <gtest/gtest.h>
+#include <zlib.h>
+
+#include <cstring>
+#include <filesystem>
+#include <random>
+
+#include "chladni/core/error.hpp"
+#include "chladni/core/soundbank.hpp"
+
+using namespace chladni;
+
+namespace {
+
+Soundbank small_bank() {
+  Soundbank b;
+  b.metadata_json = R"({"source":"test"})";
+  b.material = find_material("sl2016-wood:caughey");
+  b.omega = {2 * M_PI * 440, 2 * M_PI * 1000.5};
+  b.decay = {3.5, 12.25};
+  b.residual = {1e-9f, 2e-8f};
+  b.vertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  b.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const float s = float(1 / std::sqrt(3.0));
+  b.normals = {{-s, -s, -s}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int i = 0; i < 2 * 4 * 3; ++i) b.shapes.push_back(0.25f * float(i) - 1.0f);
+  b.transfer = {1, 2, 3, 4, 5};
+  return b;
+}
+
+std::string error_of(const std::vector<uint8_t>& bytes) {
+  try {
+    parse_soundbank(bytes, "t.chbank");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+// Offset and size of a section, read from the table (docs/soundbank-format.md).
+std::pair<std::size_t, std::size_t> locate(const std::vector<uint8_t>& f, const char* tag) {
+  uint32_t count;
+  std::memcpy(&count, &f[12], 4);
+  for (uint32_t s = 0; s < count; ++s) {
+    const uint8_t* e = &f[32 + 32 * s];
+    if (std::memcmp(e, tag, 4) == 0) {
+      uint64_t off, size;
+      std::memcpy(&off, e + 8, 8);
+      std::memcpy(&size, e + 16, 8);
+      return {off, size};
+    }
+  }
+  return {0, 0};
+}
+
+}  // namespace
+
+TEST(Soundbank, RoundTripsEveryField) {
+  const Soundbank a = small_bank();
+  const auto path = (std::filesystem::temp_directory_path() / "chladni_rt.chbank").string();
+  write_soundbank(path, a);
+  const Soundbank b = read_soundbank(path);
+  EXPECT_EQ(b.metadata_json, a.metadata_json);
+  EXPECT_EQ(b.material.name, a.material.name);
+  EXPECT_EQ(b.material.source, a.material.source);
+  EXPECT_EQ(b.material.youngs_modulus, a.material.youngs_modulus);
+  EXPECT_EQ(b.material.damping.kind, a.material.damping.kind);
+  EXPECT_EQ(b.material.damping.alpha, a.material.damping.alpha);
+  EXPECT_EQ(b.omega, a.omega);
+  EXPECT_EQ(b.decay, a.decay);
+  EXPECT_EQ(b.residual, a.residual);
+  EXPECT_EQ(b.vertices, a.vertices);
+  EXPECT_EQ(b.triangles, a.triangles);
+  EXPECT_EQ(b.normals, a.normals);
+  EXPECT_EQ(b.shapes, a.shapes);
+  EXPECT_EQ(b.transfer, a.transfer);
+  std::filesystem::remove(path);
+}
+
+TEST(Soundbank, IsLittleEndianWithTheDocumentedHeader) {
+  const auto f = serialize_soundbank(small_bank());
+  EXPECT_EQ(std::string(f.begin(), f.begin() + 8), "CHLADNIB");
+  EXPECT_EQ(f[8], 1);  // major, low byte first
+  EXPECT_EQ(f[9], 0);
+  EXPECT_EQ(f[12], 6);  // META MATL MODE SURF SHAP XFER
+  uint64_t size = 0;
+  for (int k = 0; k < 8; ++k) size |= uint64_t(f[16 + k]) << (8 * k);
+  EXPECT_EQ(size, f.size());
+  for (const char* tag : {"META", "MATL", "MODE", "SURF", "SHAP", "XFER"}) {
+    const auto [off, len] = locate(f, tag);
+    EXPECT_GT(len, 0u) << tag;
+    EXPECT_EQ(off % 8, 0u) << tag;
+  }
+}
+
+TEST(Soundbank, CorruptionInEachSectionNamesThatSection) {
+  const auto good = serialize_soundbank(small_bank());
+  for (const char* tag : {"META", "MATL", "MODE", "SURF", "SHAP", "XFER"}) {
+    auto f = good;
+    const auto [off, len] = locate(f, tag);
+    f[off + len / 2] ^= 0x5a;
+    const std::string err = error_of(f);
+    EXPECT_NE(err.find(std::string("section '") + tag + "' checksum mismatch"), std::string::npos)
+        << tag << ": " << err;
+  }
+  auto f = good;
+  f[40] ^= 1;  // inside the section table
+  EXPECT_NE(error_of(f).find("section table checksum"), std::string::npos);
+  f = good;
+  f[10] = 9;  // minor version without fixing the header checksum
+  EXPECT_NE(error_of(f).find("header checksum"), std::string::npos);
+}
+
+TEST(Soundbank, TruncationAndForeignFilesAreRefused) {
+  const auto good = serialize_soundbank(small_bank());
+  for (std::size_t n :
+       {std::size_t(0), std::size_t(7), std::size_t(31), std::size_t(100), good.size() - 1}) {
+    const std::vector<uint8_t> cut(good.begin(), good.begin() + n);
+    EXPECT_FALSE(error_of(cut).empty()) << n << " bytes";
+  }
+  const std::string cut = error_of(std::vector<uint8_t>(good.begin(), good.end() - 1));
+  EXPECT_NE(cut.find("truncated"), std::string::npos) << cut;
+  std::vector<uint8_t> wav = {'R', 'I', 'F', 'F'};
+  wav.resize(64, 0);
+  EXPECT_NE(error_of(wav).find("not a Chladni soundbank"), std::string::npos);
+  EXPECT_THROW(read_soundbank("/nonexistent/x.chbank"), InputError);
+}
+
+TEST(Soundbank, UnknownMajorVersionIsRefused) {
+  Soundbank b = small_bank();
+  auto f = serialize_soundbank(b);
+  f[8] = 2;
+  // Re-seal the header so that only the version is wrong.
+  const uint32_t crc = uint32_t(crc32(crc32(0L, Z_NULL, 0), f.data(), 28));
+  for (int k = 0; k < 4; ++k) f[28 + k] = uint8_t(crc >> (8 * k));
+  const std::string err = error_of(f);
+  EXPECT_NE(err.find("format version 2.0 is not supported"), std::string::npos) << err;
+}
+
+TEST(Soundbank, RandomByteFlipsNeverCrash) {
+  const auto good = serialize_soundbank(small_bank());
+  std::mt19937 rng(1);
+  for (int trial = 0; trial < 2000; ++trial) {
+    auto f = good;
+    const int flips = 1 + int(rng() % 4);
+    for (int k = 0; k < flips; ++k) f[rng() % f.size()] ^= uint8_t(1 + rng() % 255);
+    try {
+      // Accepted only when the flips hit the zero padding between sections: same content.
+      const Soundbank b = parse_soundbank(f, "fuzz");
+      EXPECT_EQ(serialize_soundbank(b), good) << "trial " << trial;
+    } catch (const InputError&) {
+    }
+  }
+}
+
+TEST(Soundbank, InvalidContentIsRefusedBeforeWriting) {
+  Soundbank b = small_bank();
+  b.triangles[1][2] = 9;
+  try {
+    serialize_soundbank(b);
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("triangle 1 refers to vertex 9"), std::string::npos);
+  }
+  b = small_bank();
+  b.omega[1] = std::nan("");
+  EXPECT_THROW(serialize_soundbank(b), InputError);
+  b = small_bank();
+  b.shapes.pop_back();
+  EXPECT_THROW(serialize_soundbank(b), InputError);
+}
+
+TEST(Soundbank, ModalModelCarriesShapesAndRadiation) {
+  const Soundbank b = small_bank();
+  const ModalModel m = to_modal_model(b, "bank");
+  ASSERT_EQ(m.mode_count(), 2u);
+  EXPECT_EQ(m.points.size(), 4u);
+  EXPECT_FLOAT_EQ(float(m.shape(1, 2)[1]), b.shapes[(1 * 4 + 2) * 3 + 1]);
+  for (double r : m.radiation) EXPECT_GT(r, 0);
+  EXPECT_NO_THROW(m.validate());
+}
