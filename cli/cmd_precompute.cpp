@@ -55,7 +55,8 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                 {"capped", r.eigen.capped},
                 {"max_residual", r.max_residual},
                 {"factor_seconds", r.eigen.factor_seconds},
-                {"lanczos_seconds", r.eigen.lanczos_seconds}};
+                {"lanczos_seconds", r.eigen.lanczos_seconds},
+                {"solve_seconds", r.eigen.solve_seconds}};
   j["modes"] = {{"kept", r.kept},
                 {"overdamped", r.overdamped},
                 {"below_band", r.below_band},

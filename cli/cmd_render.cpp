@@ -8,6 +8,7 @@
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/scene.hpp"
+#include "chladni/core/soundbank.hpp"
 #include "chladni/precompute/analytic_bar.hpp"
 #include "chladni/runtime/render.hpp"
 #include "commands.hpp"
@@ -57,10 +58,30 @@ void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>
         objects.push_back(runtime::object_modes(*models.back()));
         break;
       }
-      case SceneObject::Source::Soundbank:
-        throw InputError(obj.json_path + ".soundbank: cannot load " + obj.soundbank +
-                         ": soundbank files come with the precompute pipeline, which this build "
-                         "does not have yet; use 'modes' or 'bar' objects");
+      case SceneObject::Source::Soundbank: {
+        const Soundbank bank = read_soundbank(obj.soundbank);
+        auto model = std::make_unique<ModalModel>(to_modal_model(bank, obj.name));
+        // The bank was made for some sample rate; keep what this scene can play.
+        std::vector<std::size_t> kept;
+        for (std::size_t i = 0; i < model->mode_count(); ++i)
+          if (model->damped_omega(i) < std::numbers::pi * scene.sample_rate) kept.push_back(i);
+        const std::size_t dropped = model->mode_count() - kept.size();
+        keep_modes(*model, kept);
+        if (model->mode_count() == 0)
+          throw InputError(obj.json_path + ".soundbank: " + obj.soundbank +
+                           " has no mode below the scene's Nyquist frequency");
+        if (!quiet) {
+          std::printf("  %-12s soundbank %s (%s, %s): %zu modes (%zu above Nyquist); lowest",
+                      obj.name.c_str(), obj.soundbank.c_str(), bank.material.name.c_str(),
+                      bank.material.damping.to_string().c_str(), model->mode_count(), dropped);
+          for (std::size_t i = 0; i < std::min<std::size_t>(5, model->mode_count()); ++i)
+            std::printf(" %.1f", model->damped_omega(i) / (2 * std::numbers::pi));
+          std::printf(" Hz\n");
+        }
+        models.push_back(std::move(model));
+        objects.push_back(runtime::object_modes(*models.back()));
+        break;
+      }
     }
   }
 }

@@ -1,7 +1,7 @@
 // Spectra + sparse Cholesky: the only unit that includes them.
 #include "chladni/precompute/eigensolve.hpp"
 
-#include <Spectra/SymGEigsShiftSolver.h>
+#include <Spectra/SymEigsSolver.h>
 #include <Eigen/Cholesky>
 #include <Eigen/SparseCholesky>
 #ifdef CHLADNI_HAVE_CHOLMOD
@@ -11,77 +11,137 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <thread>
 
 #include "chladni/core/error.hpp"
 
 namespace chladni::precompute {
 namespace {
 
+// K - sigma M = P^T L L^T P (sigma < 0, so the matrix is SPD). Lanczos then runs on the standard
+// symmetric operator C = L^-1 P M P^T L^-T, whose eigenpairs are 1 / (lambda - sigma) and
+// y = L^T P v: the same spectrum as shift-invert, but with Euclidean inner products, so no
+// mass-matrix product per inner product and per reorthogonalization pass (which dominated the
+// generalized mode of Spectra).
 #ifdef CHLADNI_HAVE_CHOLMOD
-using Factor = Eigen::CholmodSupernodalLLT<SparseMatrix, Eigen::Lower>;
 constexpr const char* kFactorName = "CHOLMOD supernodal LLT";
+
+// Eigen's CholmodSupernodalLLT, with the half solves that Eigen does not expose.
+class Factor : public Eigen::CholmodBase<SparseMatrix, Eigen::Lower, Factor> {
+ public:
+  Factor() {
+    m_cholmod.final_asis = 1;
+    m_cholmod.supernodal = CHOLMOD_SUPERNODAL;
+    m_cholmod.print = 0;  // failures are reported through our exceptions
+  }
+  bool factor(const SparseMatrix& A) {
+    compute(A);
+    return info() == Eigen::Success;
+  }
+  // x <- P^T L^-T x  and  x <- L^-1 P x
+  template <class Dense>
+  void upper_solve(Dense& x) {
+    apply({CHOLMOD_Lt, CHOLMOD_Pt}, x);
+  }
+  template <class Dense>
+  void lower_solve(Dense& x) {
+    apply({CHOLMOD_P, CHOLMOD_L}, x);
+  }
+
+ private:
+  template <class Dense>
+  void apply(std::initializer_list<int> systems, Dense& x) {
+    for (int sys : systems) {
+      cholmod_dense b = Eigen::viewAsCholmod(x);
+      cholmod_dense* r = cholmod_solve(sys, m_cholmodFactor, &b, &m_cholmod);
+      if (!r) throw InternalError("CHOLMOD solve failed (out of memory?)");
+      x = Eigen::Map<Dense>(static_cast<double*>(r->x), x.rows(), x.cols());
+      cholmod_free_dense(&r, &m_cholmod);
+    }
+  }
+};
 #else
-using Factor = Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower>;
 constexpr const char* kFactorName = "Eigen SimplicialLDLT";
+
+// P A P^T = L D L^T; the split factor is L D^1/2.
+class Factor {
+ public:
+  bool factor(const SparseMatrix& A) {
+    ldlt_.compute(A);
+    if (ldlt_.info() != Eigen::Success || (ldlt_.vectorD().array() <= 0).any()) return false;
+    sqrt_d_ = ldlt_.vectorD().array().sqrt();
+    return true;
+  }
+  template <class Dense>
+  void upper_solve(Dense& x) {
+    x = sqrt_d_.cwiseInverse().asDiagonal() * x;
+    ldlt_.matrixU().solveInPlace(x);
+    x = ldlt_.permutationPinv() * x;
+  }
+  template <class Dense>
+  void lower_solve(Dense& x) {
+    x = ldlt_.permutationP() * x;
+    ldlt_.matrixL().solveInPlace(x);
+    x = sqrt_d_.cwiseInverse().asDiagonal() * x;
+  }
+
+ private:
+  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt_;
+  Eigen::VectorXd sqrt_d_;
+};
 #endif
 
-// y = (K - sigma M)^-1 x, the operator Spectra's shift-invert mode needs.
-class ShiftInvert {
+class SplitShiftInvert {
  public:
   using Scalar = double;
-  ShiftInvert(const SparseMatrix& K, const SparseMatrix& M) : K_(K), M_(M) {
-#ifdef CHLADNI_HAVE_CHOLMOD
-    factor_.cholmod().print = 0;  // failures are reported through our exceptions
-#endif
-  }
-  Eigen::Index rows() const {
-    return K_.rows();
-  }
-  Eigen::Index cols() const {
-    return K_.cols();
-  }
-  void set_shift(double sigma) {
-    if (sigma == sigma_ && factored_) return;
+  SplitShiftInvert(const SparseMatrix& K, const SparseMatrix& M) : K_(K), M_(M), w_(K.rows()) {}
+  Eigen::Index rows() const { return K_.rows(); }
+  Eigen::Index cols() const { return K_.cols(); }
+  void factor(double sigma) {
     const SparseMatrix A = K_ - sigma * M_;
-    factor_.compute(A);
-    if (factor_.info() != Eigen::Success)
+    if (!factor_.factor(A))
       throw InputError("the sparse factorization of K - sigma M (" + std::to_string(K_.rows()) +
                        " DOFs, " + std::to_string(K_.nonZeros()) +
                        " entries) failed: the problem is too large for the factorization or the "
                        "stiffness is not positive semi-definite; lower --max-freq or raise "
                        "--max-tet-volume");
-    sigma_ = sigma, factored_ = true;
   }
+  // y = C x
   void perform_op(const double* x, double* y) const {
-    Eigen::Map<const Eigen::VectorXd> xv(x, K_.rows());
-    Eigen::Map<Eigen::VectorXd> yv(y, K_.rows());
-    yv = factor_.solve(xv);
+    const auto t0 = std::chrono::steady_clock::now();
+    w_ = Eigen::Map<const Eigen::VectorXd>(x, rows());
+    factor_.upper_solve(w_);
+    Eigen::VectorXd z = M_ * w_;
+    factor_.lower_solve(z);
+    Eigen::Map<Eigen::VectorXd>(y, rows()) = z;
+    solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
+  // Each column y <- P^T L^-T y, a vector of the original problem.
+  void to_modes(Eigen::MatrixXd& Y) { factor_.upper_solve(Y); }
+  mutable double solve_seconds = 0;
 
  private:
   const SparseMatrix& K_;
   const SparseMatrix& M_;
-  Factor factor_;
-  double sigma_ = 0;
-  bool factored_ = false;
+  mutable Factor factor_;  // CHOLMOD's workspace changes during solves
+  mutable Eigen::VectorXd w_;
 };
 
-// y = M x with the full symmetric storage (faster than a self-adjoint view).
-class MassProduct {
- public:
-  using Scalar = double;
-  explicit MassProduct(const SparseMatrix& M) : M_(M) {}
-  Eigen::Index rows() const { return M_.rows(); }
-  Eigen::Index cols() const { return M_.cols(); }
-  void perform_op(const double* x, double* y) const {
-    Eigen::Map<const Eigen::VectorXd> xv(x, M_.rows());
-    Eigen::Map<Eigen::VectorXd> yv(y, M_.rows());
-    yv.noalias() = M_ * xv;
+// A * X with the columns of X split over the cores (Eigen runs sparse * dense on one).
+Eigen::MatrixXd parallel_product(const SparseMatrix& A, const Eigen::MatrixXd& X) {
+  Eigen::MatrixXd Y(A.rows(), X.cols());
+  const int nt =
+      std::max(1, std::min<int>(int(std::thread::hardware_concurrency()), int(X.cols())));
+  std::vector<std::thread> pool;
+  for (int t = 0; t < nt; ++t) {
+    pool.emplace_back([&, t] {
+      const Eigen::Index lo = X.cols() * t / nt, hi = X.cols() * (t + 1) / nt;
+      Y.middleCols(lo, hi - lo).noalias() = A * X.middleCols(lo, hi - lo);
+    });
   }
-
- private:
-  const SparseMatrix& M_;
-};
+  for (auto& th : pool) th.join();
+  return Y;
+}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -108,12 +168,12 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   EigenResult r;
   r.factorization = kFactorName;
   auto t0 = std::chrono::steady_clock::now();
-  ShiftInvert op(K, M);
+  SplitShiftInvert op(K, M);
   // Round-off on a badly shaped mesh can make K - sigma M indefinite along the rigid motions
   // when |sigma| is tiny next to K's scale: move the shift further down and retry.
   for (int attempt = 0;; ++attempt) {
     try {
-      op.set_shift(sigma);
+      op.factor(sigma);
       break;
     } catch (const InputError&) {
       if (attempt == 4) throw;
@@ -123,7 +183,6 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   }
   r.shift = sigma;
   r.factor_seconds = seconds_since(t0);
-  MassProduct Bop(M);
 
   // M-orthonormal basis of the rigid motions: Q = R L^-T with L L^T = R^T M R.
   const Eigen::MatrixXd MR = M * rigid;
@@ -133,7 +192,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   const Eigen::MatrixXd MQ = llt.matrixL().solve(MR.transpose()).transpose();  // M Q
 
   const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
-  Eigen::Index nev = o.modes > 0 ? Eigen::Index(o.modes) + 6 : std::min<Eigen::Index>(46, max_nev);
+  Eigen::Index nev = o.modes > 0 ? Eigen::Index(o.modes) + 6 : std::min<Eigen::Index>(32, max_nev);
   if (o.modes > 0 && nev > max_nev)
     throw InputError("asked for " + std::to_string(o.modes) + " modes but the mesh has only " +
                      std::to_string(n) + " degrees of freedom (or the cap " +
@@ -146,17 +205,16 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
         std::min<Eigen::Index>(n, std::max<Eigen::Index>(2 * nev + 1, nev + 20));
     if (status)
       status("Lanczos for " + std::to_string(nev) + " modes (" + std::to_string(ncv) + " vectors)");
-    Spectra::SymGEigsShiftSolver<ShiftInvert, MassProduct, Spectra::GEigsMode::ShiftInvert> eigs(
-        op, Bop, nev, ncv, sigma);
+    Spectra::SymEigsSolver<SplitShiftInvert> eigs(op, nev, ncv);
     eigs.init();
-    eigs.compute(Spectra::SortRule::LargestMagn, 1000, o.tolerance,
-                 Spectra::SortRule::SmallestAlge);
+    eigs.compute(Spectra::SortRule::LargestAlge, 1000, o.tolerance, Spectra::SortRule::LargestAlge);
     ++r.solves;
     r.operations += eigs.num_operations();
     if (eigs.info() != Spectra::CompInfo::Successful)
       throw InternalError("the eigen-solver did not converge for " + std::to_string(nev) +
                           " modes");
-    evals = eigs.eigenvalues();
+    // theta = 1 / (lambda - sigma), largest first: lambda ascending.
+    evals = (1.0 / eigs.eigenvalues().array() + sigma).matrix();
     evecs = eigs.eigenvectors();
     if (o.modes > 0 || evals(evals.size() - 1) >= lambda_max) break;
     if (nev >= max_nev) {
@@ -170,15 +228,18 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
                                  std::max<Eigen::Index>(2 * nev, Eigen::Index(nev * grow) + 10));
   }
   r.lanczos_seconds = seconds_since(t0);
+  r.solve_seconds = op.solve_seconds;
 
-  // Classify rigid modes by their M-weighted overlap with the rigid motions.
+  // Back to the original problem in one multi-right-hand-side solve, M-normalize, and classify
+  // rigid modes by their M-weighted overlap with the rigid motions.
+  op.to_modes(evecs);
+  Eigen::MatrixXd Mv = parallel_product(M, evecs);
   std::vector<Eigen::Index> elastic;
   for (Eigen::Index j = 0; j < evals.size(); ++j) {
-    Eigen::VectorXd v = evecs.col(j);
-    const double mnorm = std::sqrt(v.dot(M * v));
-    v /= mnorm;
-    evecs.col(j) = v;
-    const double overlap = (MQ.transpose() * v).norm();
+    const double mnorm = std::sqrt(evecs.col(j).dot(Mv.col(j)));
+    evecs.col(j) /= mnorm;
+    Mv.col(j) /= mnorm;
+    const double overlap = (MQ.transpose() * evecs.col(j)).norm();
     if (overlap > 0.5) {
       ++r.rigid_removed;
       r.rigid_lambda.push_back(evals(j));
@@ -201,11 +262,17 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
     r.lambda.push_back(evals(j));
   }
   r.vectors.resize(n, Eigen::Index(r.lambda.size()));
+  Eigen::MatrixXd Mk(n, r.vectors.cols());
   for (std::size_t i = 0; i < r.lambda.size(); ++i) {
     r.vectors.col(Eigen::Index(i)) = evecs.col(elastic[i]);
-    const Eigen::VectorXd Kv = K * r.vectors.col(Eigen::Index(i));
-    const Eigen::VectorXd res = Kv - r.lambda[i] * (M * r.vectors.col(Eigen::Index(i)));
-    r.residual.push_back(res.norm() / Kv.norm());
+    Mk.col(Eigen::Index(i)) = Mv.col(elastic[i]);
+  }
+  evecs.resize(0, 0);
+  Mv.resize(0, 0);
+  const Eigen::MatrixXd Kv = parallel_product(K, r.vectors);
+  for (std::size_t i = 0; i < r.lambda.size(); ++i) {
+    const auto c = Eigen::Index(i);
+    r.residual.push_back((Kv.col(c) - r.lambda[i] * Mk.col(c)).norm() / Kv.col(c).norm());
   }
   return r;
 }

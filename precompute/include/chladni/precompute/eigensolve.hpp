@@ -29,6 +29,7 @@ struct EigenResult {
   std::string factorization;         ///< "CHOLMOD supernodal LLT" or "Eigen SimplicialLDLT"
   double shift = 0;                  ///< sigma used (rad^2/s^2)
   double factor_seconds = 0, lanczos_seconds = 0;
+  double solve_seconds = 0;  ///< part of lanczos_seconds spent in the triangular solves
 };
 
 /// `rigid` holds the six rigid-body motions (rigid_body_modes): computed modes whose M-weighted
