@@ -1,4 +1,6 @@
 // chladni precompute MESH -o BANK: the precompute pipeline from a closed mesh to a soundbank.
+#include <sys/resource.h>
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -21,6 +23,7 @@ struct PrecomputeArgs {
   double max_tet_volume = 0;
   int order = 2, threads = 0;
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
+  std::string eigensolver = "block";
   bool repair = false, quiet = false;
 };
 
@@ -68,6 +71,9 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
   for (const auto& s : r.stages) stages[s.name] = s.seconds;
   j["seconds"] = stages;
   j["total_seconds"] = r.total_seconds;
+  rusage ru{};
+  getrusage(RUSAGE_SELF, &ru);
+  j["peak_rss_mb"] = double(ru.ru_maxrss) / 1024.0;  // Linux reports KiB
   return j;
 }
 
@@ -96,6 +102,10 @@ void run_precompute(const PrecomputeArgs& a) {
   o.max_tet_volume = a.max_tet_volume;
   o.threads = a.threads;
   o.mode_cap = std::max(a.mode_cap, a.max_modes);
+  if (a.eigensolver == "spectra")
+    o.eigensolver = precompute::EigenOptions::Method::Spectra;
+  else if (a.eigensolver != "block")
+    throw InputError("--eigensolver must be block or spectra");
 
   ProgressBar bar(a.quiet);
   precompute::Progress p;
@@ -172,6 +182,9 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("--max-tet-volume", a->max_tet_volume,
                   "Largest tetrahedron (m^3; 0: from --max-freq)");
   cmd->add_option("--mode-cap", a->mode_cap, "Most modes searched for below --max-freq")
+      ->capture_default_str();
+  cmd->add_option("--eigensolver", a->eigensolver,
+                  "block (block Lanczos, default) or spectra (Spectra's Lanczos), same operator")
       ->capture_default_str();
   cmd->add_flag("--repair", a->repair, "Try CGAL's standard repairs on a bad mesh and report them");
   cmd->add_option("--save-surface", a->save_surface, "Write the checked (repaired) surface as OBJ");

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The main job: install dependencies, build Chladni, and render the demo sound to out/.
+# The main job: install dependencies, build Chladni, precompute soundbanks for two bundled meshes
+# and render a scene that strikes them, to out/.
 # Usage: bash scripts/demo.sh            (from the repository root, as root on Debian 12)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -8,10 +9,17 @@ jobs=$(nproc)
 cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DCHLADNI_BUILD_TESTS=OFF \
   -DCHLADNI_BUILD_BENCH=OFF
 cmake --build build/release --target chladni -j "$jobs"
+chladni=./build/release/cli/chladni
 mkdir -p out
-# A struck steel bar (analytic Euler-Bernoulli modes, until the precompute pipeline lands) and a
-# glass, rendered on the CPU reference and on the GPU filterbank (Vulkan; lavapipe without a GPU).
-./build/release/cli/chladni render examples/struck_bar.json -o out/struck_bar.wav --normalize -1
-./build/release/cli/chladni render examples/struck_bar.json -o out/struck_bar_gpu.wav --normalize -1 \
+# Mesh -> checked surface -> TetGen -> quadratic FEM -> modes below 20 kHz -> damping -> soundbank.
+$chladni precompute meshes/bar.obj -o out/bar.chbank --material steel --json out/bar.json
+$chladni precompute meshes/bowl.obj -o out/bowl.chbank --material brass --json out/bowl.json
+$chladni info out/bowl.chbank | head -24
+# The bowl struck on its rim twice and the bar at an end and at its centre, on the CPU reference
+# and on the GPU filterbank (Vulkan; Mesa lavapipe when there is no GPU).
+$chladni render examples/bowl_and_bar.json -o out/bowl_and_bar.wav --normalize -1
+$chladni render examples/bowl_and_bar.json -o out/bowl_and_bar_gpu.wav --normalize -1 \
   --backend gpu --block 1024
-echo "demo: wrote out/struck_bar.wav and out/struck_bar_gpu.wav"
+# The analytic-bar example of the runtime (no precompute).
+$chladni render examples/struck_bar.json -o out/struck_bar.wav --normalize -1
+echo "demo: wrote out/bowl_and_bar.wav, out/bowl_and_bar_gpu.wav and out/struck_bar.wav"

@@ -106,3 +106,95 @@ TEST(Cli, BenchJsonHasEveryFieldForEveryBackend) {
     EXPECT_LE(rec["block_ms_p50"].get<double>(), rec["block_ms_p99"].get<double>());
   }
 }
+
+TEST(CliPrecompute, BarToBankToInfoToRender) {
+  const std::string bank = temp("chladni_cli_bar.chbank"), summary = temp("chladni_cli_bar.json");
+  Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank +
+                 " --max-modes 6 --max-tet-volume 1e-6 --json " + summary);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("6 rigid modes removed"), std::string::npos) << r.output;
+  nlohmann::json j = nlohmann::json::parse(std::ifstream(summary));
+  EXPECT_EQ(j["modes"]["kept"], 6);
+  EXPECT_EQ(j["eigen"]["rigid_removed"], 6);
+  for (const char* stage :
+       {"read mesh", "check surface", "tetrahedralize", "assemble", "eigen-solve"})
+    EXPECT_TRUE(j["seconds"].contains(stage)) << stage;
+  EXPECT_NEAR(j["frequencies_hz"][0].get<double>(), 575.0, 6.0);
+
+  r = run("info " + bank + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  j = nlohmann::json::parse(r.output);
+  EXPECT_EQ(j["modes"].size(), 6u);
+  EXPECT_EQ(j["material"]["name"], "steel");
+  const auto& m0 = j["modes"][0];
+  EXPECT_NEAR(m0["t60_s"].get<double>() * m0["decay_per_s"].get<double>(), std::log(1000.0), 1e-9);
+  r = run("info " + bank);
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.output.find("T60 (s)"), std::string::npos);
+
+  const std::string scene = write_file("chladni_cli_bank_scene.json", R"({
+    "objects": [{"name": "bar", "soundbank": ")" + bank + R"("}],
+    "events": [{"time": 0.01, "type": "impact", "object": "bar", "impulse": 0.01, "vertex": 3}],
+    "duration": 1.0})");
+  const std::string wav = temp("chladni_cli_bank.wav");
+  r = run("render " + scene + " -o " + wav);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const chladni::AudioBuffer a = chladni::read_audio(wav);
+  float peak = 0;
+  for (float x : a.samples) peak = std::max(peak, std::abs(x));
+  EXPECT_GT(peak, 0.0f);
+
+  // A corrupted bank is refused by render and info, naming the section.
+  std::vector<char> bytes;
+  {
+    std::ifstream f(bank, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(f), {});
+  }
+  bytes[bytes.size() - 9] ^= 0x40;  // inside the last section (SHAP)
+  const std::string bad = temp("chladni_cli_bad.chbank");
+  std::ofstream(bad, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
+  r = run("info " + bad);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("section 'SHAP' checksum mismatch"), std::string::npos) << r.output;
+}
+
+TEST(CliPrecompute, BrokenMeshesExitWith2AndRepairGoesThrough) {
+  Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/broken/elephant_with_holes.obj -o " +
+                 temp("chladni_e.chbank"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("not closed: 1353 boundary edges"), std::string::npos) << r.output;
+  r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/broken/teapot_solid_selfintersecting.obj -o " +
+          temp("chladni_t.chbank"));
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("35 pairs of faces intersect"), std::string::npos) << r.output;
+  // Read as centimetres the teapot is 17.6 cm long: repaired, meshed coarsely and solved.
+  r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/broken/teapot_solid_selfintersecting.obj -o " +
+          temp("chladni_t.chbank") +
+          " --unit cm --repair --order 1 --max-modes 4 --max-tet-volume 2e-6");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("repaired: self-intersections: 35 face pairs -> 0"), std::string::npos)
+      << r.output;
+}
+
+TEST(CliPrecompute, BadArgumentsNameTheProblem) {
+  const std::string out = temp("chladni_x.chbank");
+  const std::string bar = CHLADNI_SOURCE_DIR "/meshes/bar.obj";
+  Result r = run("precompute " + bar + " -o " + out + " --material unobtainium");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("unknown material 'unobtainium'; known: steel"), std::string::npos);
+  r = run("precompute " + bar + " -o " + out + " --nu 0.5");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("Poisson's ratio"), std::string::npos);
+  r = run("precompute " + bar + " -o " + out + " --damping rayleigh:1");
+  EXPECT_EQ(r.code, 2);
+  r = run("precompute " + bar + " -o " + out + " --order 3");
+  EXPECT_EQ(r.code, 2);
+  r = run("precompute " + bar + " -o " + out + " --unit furlong");
+  EXPECT_EQ(r.code, 2);
+  r = run("precompute /nonexistent.obj -o " + out);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("no such mesh file"), std::string::npos);
+  r = run("materials");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_NE(r.output.find("sl2016-porcelain:caughey"), std::string::npos);
+}

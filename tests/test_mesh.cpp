@@ -7,6 +7,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
+#include "fem_fixtures.hpp"
 
 using namespace chladni;
 using namespace chladni::precompute;
@@ -250,4 +251,15 @@ TEST(Tetrahedralize, AutoSizeShrinksWithFrequencyAndOrder) {
   const double v1 = auto_max_volume(steel, 5000, 1, s), v2 = auto_max_volume(steel, 5000, 2, s);
   EXPECT_NEAR(v1 / v2, 1.0 / 8, 1e-12);  // half the edge length for linear elements
   EXPECT_NEAR(auto_max_volume(steel, 10000, 2, s) / v2, 1.0 / 8, 1e-12);
+}
+
+TEST(MeshFixtures, GeneratedBoxAndSphereAreValidSolids) {
+  const SurfaceMesh box = test::box_surface({0.3, 0.03, 0.01}, {30, 3, 2});
+  const MeshReport r = check_mesh(box);
+  EXPECT_TRUE(r.ok()) << message_of(box);
+  EXPECT_NEAR(r.volume, 9e-5, 1e-15);
+  const SurfaceMesh s = test::icosphere(0.1, 2);
+  const MeshReport rs = check_mesh(s);
+  EXPECT_TRUE(rs.ok()) << message_of(s);
+  EXPECT_NEAR(rs.volume, 4.0 / 3 * M_PI * 1e-3, 0.05 * 4.0 / 3 * M_PI * 1e-3);  // facets cut 3.4%
 }

@@ -8,6 +8,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "elastic_reference.hpp"
+#include "fem_fixtures.hpp"
 
 using namespace chladni;
 using namespace chladni::precompute;
@@ -18,87 +19,6 @@ const std::string kMeshes = CHLADNI_SHARED_MESHES;
 
 double hz(double omega) {
   return omega / (2 * std::numbers::pi);
-}
-
-// Unit icosahedron subdivided `level` times and projected onto the sphere of radius r.
-SurfaceMesh icosphere(double r, int level) {
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  SurfaceMesh m;
-  m.vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
-                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
-  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  for (int l = 0; l < level; ++l) {
-    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
-    auto midpoint = [&](uint32_t a, uint32_t b) {
-      auto [it, fresh] = mid.emplace(std::minmax(a, b), uint32_t(m.vertices.size()));
-      if (fresh) {
-        const Vec3 &p = m.vertices[a], &q = m.vertices[b];
-        m.vertices.push_back({(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2});
-      }
-      return it->second;
-    };
-    std::vector<std::array<uint32_t, 3>> next;
-    for (const auto& f : m.triangles) {
-      const uint32_t a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
-      next.push_back({f[0], a, c}), next.push_back({f[1], b, a}), next.push_back({f[2], c, b});
-      next.push_back({a, b, c});
-    }
-    m.triangles = std::move(next);
-  }
-  for (Vec3& v : m.vertices) {
-    const double l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-    for (double& x : v) x *= r / l;
-  }
-  return m;
-}
-
-enum class Kind { BendZ, BendY, Other };
-
-// Bar modes by shape: mostly across z (thickness) or y (width), and bending (the transverse
-// motion is mirror-symmetric across the section) rather than torsion (antisymmetric).
-std::vector<Kind> classify(const Soundbank& b) {
-  const std::size_t nv = b.vertices.size();
-  Vec3 c{0, 0, 0};
-  for (const Vec3& v : b.vertices)
-    for (int k = 0; k < 3; ++k) c[k] += v[k] / double(nv);
-  // mirror[axis][v]: the vertex nearest to v reflected across the centre plane normal to axis.
-  std::vector<std::size_t> mirror[3];
-  for (int axis : {1, 2}) {
-    for (std::size_t v = 0; v < nv; ++v) {
-      Vec3 p = b.vertices[v];
-      p[axis] = 2 * c[axis] - p[axis];
-      std::size_t best = 0;
-      double best_d = INFINITY;
-      for (std::size_t w = 0; w < nv; ++w) {
-        const double dx = b.vertices[w][0] - p[0], dy = b.vertices[w][1] - p[1],
-                     dz = b.vertices[w][2] - p[2];
-        const double d = dx * dx + dy * dy + dz * dz;
-        if (d < best_d) best_d = d, best = w;
-      }
-      mirror[axis].push_back(best);
-    }
-  }
-  std::vector<Kind> out;
-  for (std::size_t i = 0; i < b.mode_count(); ++i) {
-    auto s = [&](std::size_t v, int k) { return double(b.shapes[(i * nv + v) * 3 + k]); };
-    double e[3] = {0, 0, 0}, sym_z = 0, sym_y = 0;
-    for (std::size_t v = 0; v < nv; ++v) {
-      for (int k = 0; k < 3; ++k) e[k] += s(v, k) * s(v, k);
-      sym_z += s(v, 2) * s(mirror[1][v], 2);  // z motion mirrored across the width
-      sym_y += s(v, 1) * s(mirror[2][v], 1);  // y motion mirrored across the thickness
-    }
-    const double total = e[0] + e[1] + e[2];
-    if (e[2] > 0.6 * total && sym_z > 0.5 * e[2])
-      out.push_back(Kind::BendZ);
-    else if (e[1] > 0.6 * total && sym_y > 0.5 * e[1])
-      out.push_back(Kind::BendY);
-    else
-      out.push_back(Kind::Other);
-  }
-  return out;
 }
 
 }  // namespace
@@ -116,12 +36,12 @@ TEST(ModalFem, SteelBarMatchesTimoshenkoWithinOnePercent) {
   const double kappa = test::cowper_rectangle(nu);
   const auto ref_z = test::timoshenko_free_free(L, E, nu, rho, w * h, w * h * h * h / 12, kappa, 4);
   const auto ref_y = test::timoshenko_free_free(L, E, nu, rho, w * h, h * w * w * w / 12, kappa, 2);
-  const auto kinds = classify(b);
+  const auto kinds = test::classify_bar_modes(b);
   std::vector<double> fz, fy;
   for (std::size_t i = 0; i < b.mode_count(); ++i) {
     const double wd = std::sqrt(b.omega[i] * b.omega[i] - b.decay[i] * b.decay[i]);
-    if (kinds[i] == Kind::BendZ) fz.push_back(hz(wd));
-    if (kinds[i] == Kind::BendY) fy.push_back(hz(wd));
+    if (kinds[i] == test::BarMode::BendZ) fz.push_back(hz(wd));
+    if (kinds[i] == test::BarMode::BendY) fy.push_back(hz(wd));
   }
   ASSERT_GE(fz.size(), ref_z.size());
   ASSERT_GE(fy.size(), ref_y.size());
@@ -140,7 +60,7 @@ TEST(ModalFem, FreeSphereMatchesLambWithinOnePercent) {
   PrecomputeOptions o;
   o.max_frequency = 15000;
   PrecomputeReport r;
-  const Soundbank b = precompute_surface(icosphere(a, 3), "icosphere", o, r);
+  const Soundbank b = precompute_surface(test::icosphere(a, 3), "icosphere", o, r);
   EXPECT_EQ(r.eigen.rigid_removed, 6u);
   const double cs = o.material.shear_speed(), nu = o.material.poisson_ratio;
   const double f_t2 = test::lamb_torsional(2, 4)[0] * cs / (2 * std::numbers::pi * a);
@@ -202,5 +122,28 @@ TEST(ModalFem, ObjectWithoutAudibleModesIsRefused) {
     FAIL();
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no mode lies in"), std::string::npos) << e.what();
+  }
+}
+
+TEST(ModalFem, BlockLanczosAndSpectraAgree) {
+  PrecomputeOptions o;
+  o.max_modes = 12;
+  o.max_tet_volume = 1e-6;
+  PrecomputeReport rb, rs;
+  const Soundbank b = precompute_mesh(kMeshes + "/bar.obj", o, rb);
+  o.eigensolver = EigenOptions::Method::Spectra;
+  const Soundbank s = precompute_mesh(kMeshes + "/bar.obj", o, rs);
+  ASSERT_EQ(b.mode_count(), s.mode_count());
+  for (std::size_t i = 0; i < b.mode_count(); ++i) {
+    EXPECT_NEAR(b.omega[i] / s.omega[i], 1.0, 1e-9) << "mode " << i;
+    EXPECT_LT(b.residual[i], 1e-8);
+    // Same shape up to sign (modes here are not degenerate).
+    const std::size_t nv = b.vertices.size();
+    double dot = 0, nb = 0, ns = 0;
+    for (std::size_t k = 0; k < 3 * nv; ++k) {
+      const double x = b.shapes[i * 3 * nv + k], y = s.shapes[i * 3 * nv + k];
+      dot += x * y, nb += x * x, ns += y * y;
+    }
+    EXPECT_NEAR(std::abs(dot) / std::sqrt(nb * ns), 1.0, 1e-5) << "mode " << i;
   }
 }

@@ -112,6 +112,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   eo.modes = o.max_modes;
   eo.max_frequency = o.max_frequency;
   eo.mode_cap = o.mode_cap;
+  eo.method = o.eigensolver;
   r.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
   km = FemMatrices{};  // release before building the bank
   r.computed = r.eigen.lambda.size();

@@ -28,6 +28,7 @@ struct PrecomputeOptions {
   TetOptions tet;
   int threads = 0;
   std::size_t mode_cap = 2000;
+  EigenOptions::Method eigensolver = EigenOptions::Method::BlockLanczos;
 };
 
 struct StageTime {

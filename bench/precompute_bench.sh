@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Precompute speed on the bundled meshes (docs/PERFORMANCE.md, "Precompute"). Each case runs
+# `chladni precompute --json` and one table row is printed from its summary.
+# Usage: bash bench/precompute_bench.sh [path/to/chladni]     (default: build/cli/chladni)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+chladni=${1:-build/cli/chladni}
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+row() {  # name, then the precompute arguments
+  local name=$1
+  shift
+  "$chladni" precompute "$@" -o "$out/bank.chbank" --json "$out/s.json" -q
+  python3 - "$name" "$out/s.json" <<'PY'
+import json, sys
+name, path = sys.argv[1], sys.argv[2]
+j = json.load(open(path))
+v, e, s = j["volume_mesh"], j["eigen"], j["seconds"]
+f = j["frequencies_hz"]
+print(f"| {name} | P{v['element_order']} | {v['tetrahedra']} | {v['dofs']} | {j['modes']['kept']} "
+      f"| {f[0]:.1f} | {s['tetrahedralize']:.2f} | {s['assemble']:.2f} | {s['eigen-solve']:.2f} "
+      f"| {s['assemble'] + s['eigen-solve']:.2f} | {j['total_seconds']:.2f} | {j['peak_rss_mb']:.0f} |")
+PY
+}
+
+echo "| case | order | tets | DOFs | modes | f1 (Hz) | TetGen (s) | assembly (s) | eigen-solve (s) | assembly + eigen (s) | total (s) | peak RSS (MB) |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+row "bar.obj, defaults (steel, all modes < 20 kHz)" meshes/bar.obj
+row "bar.obj, 100 modes" meshes/bar.obj --max-modes 100
+row "spot.obj x0.1, 100 modes, defaults" meshes/spot.obj --scale 0.1 --max-modes 100
+row "bell.obj brass, 100 modes" meshes/bell.obj --material brass --max-modes 100
+row "bowl.obj brass, defaults" meshes/bowl.obj --material brass
+row "spot.obj x0.1, 20k tets, P1, 100 modes" meshes/spot.obj --scale 0.1 --order 1 --max-tet-volume 2e-7 --max-modes 100
+row "spot.obj x0.1, meshed for P2 (auto, 20 kHz), 100 modes" meshes/spot.obj --scale 0.1 --order 2 --max-modes 100
+row "spot.obj x0.1, the same 20k tets, P2, 100 modes" meshes/spot.obj --scale 0.1 --order 2 --max-tet-volume 2e-7 --max-modes 100
+row "spot.obj x0.1, 200k tets, P1, 100 modes" meshes/spot.obj --scale 0.1 --order 1 --max-tet-volume 5e-9 --max-modes 100

@@ -1,0 +1,129 @@
+#pragma once
+// Closed surfaces made in code for the FEM tests and the convergence study: a subdivided
+// icosahedron on a sphere and a box with a regular grid on each face.
+#include <array>
+#include <cmath>
+#include <map>
+#include <vector>
+
+#include "chladni/core/soundbank.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+
+namespace chladni::test {
+
+using precompute::SurfaceMesh;
+
+// Unit icosahedron subdivided `level` times and projected onto the sphere of radius r.
+inline SurfaceMesh icosphere(double r, int level) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  SurfaceMesh m;
+  m.vertices = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                 {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                 {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                 {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  for (int l = 0; l < level; ++l) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+      auto [it, fresh] = mid.emplace(std::minmax(a, b), uint32_t(m.vertices.size()));
+      if (fresh) {
+        const Vec3 &p = m.vertices[a], &q = m.vertices[b];
+        m.vertices.push_back({(p[0] + q[0]) / 2, (p[1] + q[1]) / 2, (p[2] + q[2]) / 2});
+      }
+      return it->second;
+    };
+    std::vector<std::array<uint32_t, 3>> next;
+    for (const auto& f : m.triangles) {
+      const uint32_t a = midpoint(f[0], f[1]), b = midpoint(f[1], f[2]), c = midpoint(f[2], f[0]);
+      next.push_back({f[0], a, c}), next.push_back({f[1], b, a}), next.push_back({f[2], c, b});
+      next.push_back({a, b, c});
+    }
+    m.triangles = std::move(next);
+  }
+  for (Vec3& v : m.vertices) {
+    const double l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    for (double& x : v) x *= r / l;
+  }
+  return m;
+}
+
+/// Box [0, L] x [0, W] x [0, H] with n[0] x n[1] x n[2] cells on its faces, outward triangles.
+inline SurfaceMesh box_surface(const Vec3& size, const std::array<int, 3>& n) {
+  SurfaceMesh m;
+  std::map<std::array<int, 3>, uint32_t> index;
+  auto vertex = [&](int i, int j, int k) {
+    auto [it, fresh] = index.emplace(std::array<int, 3>{i, j, k}, uint32_t(m.vertices.size()));
+    if (fresh) m.vertices.push_back({size[0] * i / n[0], size[1] * j / n[1], size[2] * k / n[2]});
+    return it->second;
+  };
+  // For each axis a and side s, a grid over the other two axes (b, c) with (b, c, a) right-handed.
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;
+    for (int side = 0; side < 2; ++side)
+      for (int u = 0; u < n[b]; ++u)
+        for (int v = 0; v < n[c]; ++v) {
+          uint32_t q[4];
+          const int du[4] = {0, 1, 1, 0}, dv[4] = {0, 0, 1, 1};
+          for (int k = 0; k < 4; ++k) {
+            std::array<int, 3> p;
+            p[a] = side * n[a], p[b] = u + du[k], p[c] = v + dv[k];
+            q[k] = vertex(p[0], p[1], p[2]);
+          }
+          if (side == 1) {
+            m.triangles.push_back({q[0], q[1], q[2]}), m.triangles.push_back({q[0], q[2], q[3]});
+          } else {
+            m.triangles.push_back({q[0], q[2], q[1]}), m.triangles.push_back({q[0], q[3], q[2]});
+          }
+        }
+  }
+  return m;
+}
+
+enum class BarMode { BendZ, BendY, Other };
+
+// Bar modes by shape: mostly across z (thickness) or y (width), and bending (the transverse
+// motion is mirror-symmetric across the section) rather than torsion (antisymmetric).
+inline std::vector<BarMode> classify_bar_modes(const Soundbank& b) {
+  const std::size_t nv = b.vertices.size();
+  Vec3 c{0, 0, 0};
+  for (const Vec3& v : b.vertices)
+    for (int k = 0; k < 3; ++k) c[k] += v[k] / double(nv);
+  // mirror[axis][v]: the vertex nearest to v reflected across the centre plane normal to axis.
+  std::vector<std::size_t> mirror[3];
+  for (int axis : {1, 2}) {
+    for (std::size_t v = 0; v < nv; ++v) {
+      Vec3 p = b.vertices[v];
+      p[axis] = 2 * c[axis] - p[axis];
+      std::size_t best = 0;
+      double best_d = INFINITY;
+      for (std::size_t w = 0; w < nv; ++w) {
+        const double dx = b.vertices[w][0] - p[0], dy = b.vertices[w][1] - p[1],
+                     dz = b.vertices[w][2] - p[2];
+        const double d = dx * dx + dy * dy + dz * dz;
+        if (d < best_d) best_d = d, best = w;
+      }
+      mirror[axis].push_back(best);
+    }
+  }
+  std::vector<BarMode> out;
+  for (std::size_t i = 0; i < b.mode_count(); ++i) {
+    auto s = [&](std::size_t v, int k) { return double(b.shapes[(i * nv + v) * 3 + k]); };
+    double e[3] = {0, 0, 0}, sym_z = 0, sym_y = 0;
+    for (std::size_t v = 0; v < nv; ++v) {
+      for (int k = 0; k < 3; ++k) e[k] += s(v, k) * s(v, k);
+      sym_z += s(v, 2) * s(mirror[1][v], 2);  // z motion mirrored across the width
+      sym_y += s(v, 1) * s(mirror[2][v], 1);  // y motion mirrored across the thickness
+    }
+    const double total = e[0] + e[1] + e[2];
+    if (e[2] > 0.6 * total && sym_z > 0.5 * e[2])
+      out.push_back(BarMode::BendZ);
+    else if (e[1] > 0.6 * total && sym_y > 0.5 * e[1])
+      out.push_back(BarMode::BendY);
+    else
+      out.push_back(BarMode::Other);
+  }
+  return out;
+}
+
+}  // namespace chladni::test
