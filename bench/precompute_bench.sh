@@ -29,6 +29,7 @@ echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
 row "bar.obj, defaults (steel, all modes < 20 kHz)" meshes/bar.obj
 row "bar.obj, 100 modes" meshes/bar.obj --max-modes 100
 row "spot.obj x0.1, 100 modes, defaults" meshes/spot.obj --scale 0.1 --max-modes 100
+row "spot.obj as is (1.7 m), 100 modes, --max-freq 5000" meshes/spot.obj --max-modes 100 --max-freq 5000
 row "bell.obj brass, 100 modes" meshes/bell.obj --material brass --max-modes 100
 row "bowl.obj brass, defaults" meshes/bowl.obj --material brass
 row "spot.obj x0.1, 20k tets, P1, 100 modes" meshes/spot.obj --scale 0.1 --order 1 --max-tet-volume 2e-7 --max-modes 100

@@ -14,7 +14,7 @@ struct EigenOptions {
   double max_frequency = 20000;  ///< Hz, undamped; used when modes == 0
   std::size_t mode_cap = 2000;   ///< most elastic modes ever computed
   double shift_hz = 20;          ///< sigma = -(2 pi shift_hz)^2: below zero, so K - sigma M is SPD
-  double tolerance = 1e-10;      ///< relative Ritz residual at convergence
+  double tolerance = 1e-8;       ///< relative Ritz residual at convergence
   /// BlockLanczos (default): our block Lanczos on the same operator, blocks of `block` vectors.
   /// Spectra: Spectra's SymEigsSolver (single-vector implicitly restarted Lanczos).
   enum class Method { BlockLanczos, Spectra };
