@@ -136,7 +136,7 @@ TEST(ModalFem, BlockLanczosAndSpectraAgree) {
   ASSERT_EQ(b.mode_count(), s.mode_count());
   for (std::size_t i = 0; i < b.mode_count(); ++i) {
     EXPECT_NEAR(b.omega[i] / s.omega[i], 1.0, 1e-9) << "mode " << i;
-    EXPECT_LT(b.residual[i], 1e-8);
+    EXPECT_LT(b.residual[i], 1e-6);
     // Same shape up to sign (modes here are not degenerate).
     const std::size_t nv = b.vertices.size();
     double dot = 0, nb = 0, ns = 0;
