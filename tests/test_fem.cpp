@@ -144,7 +144,9 @@ TEST_P(FemOrder, PatchTestReproducesConstantStrainExactly) {
     const Vec3& p = fem.nodes[n];
     const bool interior = p[0] > 1e-9 && p[0] < 0.2 - 1e-9 && p[1] > 1e-9 && p[1] < 0.2 - 1e-9 &&
                           p[2] > 1e-9 && p[2] < 0.2 - 1e-9;
-    if (interior) EXPECT_LT(f.segment<3>(3 * n).norm(), 1e-10 * fscale) << "node " << n;
+    if (interior) {
+      EXPECT_LT(f.segment<3>(3 * n).norm(), 1e-10 * fscale) << "node " << n;
+    }
   }
   const Eigen::Matrix3d eps = 0.5 * (A + A.transpose());
   const double W = 0.5 * mat.lame_lambda() * eps.trace() * eps.trace() +

@@ -121,8 +121,8 @@ TEST(Soundbank, TruncationAndForeignFilesAreRefused) {
   }
   const std::string cut = error_of(std::vector<uint8_t>(good.begin(), good.end() - 1));
   EXPECT_NE(cut.find("truncated"), std::string::npos) << cut;
-  std::vector<uint8_t> wav = {'R', 'I', 'F', 'F'};
-  wav.resize(64, 0);
+  std::vector<uint8_t> wav(64, 0);
+  std::memcpy(wav.data(), "RIFF", 4);
   EXPECT_NE(error_of(wav).find("not a Chladni soundbank"), std::string::npos);
   EXPECT_THROW(read_soundbank("/nonexistent/x.chbank"), InputError);
 }
