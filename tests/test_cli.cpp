@@ -189,6 +189,11 @@ TEST(CliPrecompute, BadArgumentsNameTheProblem) {
   EXPECT_EQ(r.code, 2);
   r = run("precompute " + bar + " -o " + out + " --order 3");
   EXPECT_EQ(r.code, 2);
+  r = run("precompute " + bar + " -o " + out + " --max-freq nan");
+  EXPECT_EQ(r.code, 2);
+  r = run("precompute " + bar + " -o " + out + " --sample-rate 0");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--sample-rate"), std::string::npos);
   r = run("precompute " + bar + " -o " + out + " --unit furlong");
   EXPECT_EQ(r.code, 2);
   r = run("precompute /nonexistent.obj -o " + out);

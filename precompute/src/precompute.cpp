@@ -74,6 +74,8 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   if (!(o.max_frequency > o.min_frequency) || !(o.min_frequency >= 0) ||
       !std::isfinite(o.max_frequency))
     throw InputError("--max-freq must be finite and above the 20 Hz floor");
+  if (!(o.sample_rate >= 8000 && o.sample_rate <= 384000))
+    throw InputError("--sample-rate must lie in [8000, 384000] Hz");
   if (!(o.max_tet_volume >= 0) || !std::isfinite(o.max_tet_volume))
     throw InputError("--max-tet-volume must be finite and >= 0");
   Stopwatch sw(r, p);
