@@ -90,12 +90,20 @@ TEST(ModalFem, FirstNModesAndBandLimitsAreHonoured) {
     peak = std::max(peak, std::abs(b.shapes[v * 3 + 2]));
   EXPECT_NEAR(peak * std::sqrt(7850 * 9e-5), 2.0, 0.3);
 
-  // A sample rate of 2 kHz leaves only the modes below 1 kHz.
-  o.sample_rate = 2000;
+  // --max-freq 1000 leaves only the first mode; a sample rate of 8 kHz drops what lies above
+  // 4 kHz (574, 1574, 1671, 2964, 3061 Hz kept; 4355, 5004, 5954 Hz dropped).
+  o.max_frequency = 1000;
   PrecomputeReport r2;
   const Soundbank b2 = precompute_mesh(kMeshes + "/bar.obj", o, r2);
   EXPECT_EQ(b2.mode_count(), 1u);
   EXPECT_EQ(r2.above_band, 4u);
+  o.max_frequency = 20000;
+  o.max_modes = 8;
+  o.sample_rate = 8000;
+  PrecomputeReport r3;
+  const Soundbank b3 = precompute_mesh(kMeshes + "/bar.obj", o, r3);
+  EXPECT_EQ(b3.mode_count(), 5u);
+  EXPECT_EQ(r3.above_band, 3u);
 }
 
 TEST(ModalFem, DampingPresetsSetDecayRates) {
