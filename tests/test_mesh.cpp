@@ -3,6 +3,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
@@ -225,7 +227,23 @@ TEST(Tetrahedralize, PreservesTheSurfaceAndFillsTheVolume) {
   const TetMesh t = tetrahedralize(s, o);
   ASSERT_EQ(t.surface_vertices, s.vertices.size());
   for (std::size_t v = 0; v < s.vertices.size(); ++v) ASSERT_EQ(t.nodes[v], s.vertices[v]);
-  EXPECT_EQ(t.surface_triangles.size(), s.triangles.size());
+  // The faces of exactly one tet are the input triangles, and no tet node lies outside them
+  // on the surface.
+  std::map<std::array<uint32_t, 3>, int> faces;
+  for (const auto& tet : t.tets)
+    for (int k = 0; k < 4; ++k) {
+      std::array<uint32_t, 3> f{tet[(k + 1) % 4], tet[(k + 2) % 4], tet[(k + 3) % 4]};
+      std::sort(f.begin(), f.end());
+      ++faces[f];
+    }
+  std::set<std::array<uint32_t, 3>> boundary, input;
+  for (const auto& [f, n] : faces)
+    if (n == 1) boundary.insert(f);
+  for (auto f : s.triangles) {
+    std::sort(f.begin(), f.end());
+    input.insert(f);
+  }
+  EXPECT_EQ(boundary, input);
   const TetQuality q = tet_quality(t);
   EXPECT_NEAR(q.volume, 9e-5, 1e-12);
   EXPECT_LE(q.max_radius_edge, 2.0);

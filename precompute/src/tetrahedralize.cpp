@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <map>
 #include <numbers>
 #include <string>
 
@@ -83,56 +82,21 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetOptions& o) {
                        s.vertices[v])
       throw InternalError("TetGen moved or dropped surface vertex " + std::to_string(v));
   }
-  std::vector<std::array<uint32_t, 4>> tets(out.numberoftetrahedra);
-  for (int t = 0; t < out.numberoftetrahedra; ++t)
-    for (int k = 0; k < 4; ++k) tets[t][k] = static_cast<uint32_t>(out.tetrahedronlist[4 * t + k]);
-
-  // Boundary faces: those of exactly one tet.
-  std::map<std::array<uint32_t, 3>, std::pair<int, std::array<uint32_t, 4>>> faces;
-  for (const auto& t : tets) {
-    for (int k = 0; k < 4; ++k) {
-      std::array<uint32_t, 3> f{t[(k + 1) % 4], t[(k + 2) % 4], t[(k + 3) % 4]};
-      std::array<uint32_t, 3> key = f;
-      std::sort(key.begin(), key.end());
-      auto& e = faces[key];
-      ++e.first;
-      e.second = {f[0], f[1], f[2], t[k]};
-    }
-  }
-  // Node order: input vertices, other boundary nodes, interior nodes.
-  std::vector<uint8_t> on_boundary(np, 0);
-  for (const auto& [key, e] : faces)
-    if (e.first == 1)
-      for (uint32_t v : key) on_boundary[v] = 1;
-  std::vector<uint32_t> order(np, UINT32_MAX);
-  uint32_t next = 0;
-  for (std::size_t v = 0; v < s.vertices.size(); ++v) order[v] = next++;
-  for (std::size_t v = s.vertices.size(); v < np; ++v)
-    if (on_boundary[v]) order[v] = next++;
-  const uint32_t boundary_count = next;
-  for (std::size_t v = s.vertices.size(); v < np; ++v)
-    if (!on_boundary[v]) order[v] = next++;
-
+  // With -Y TetGen keeps the input points first, in order, and adds none on the surface: the
+  // input triangles are the mesh's boundary (tests check this).
   TetMesh m;
   m.nodes.resize(np);
   for (std::size_t v = 0; v < np; ++v)
-    m.nodes[order[v]] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
-  m.surface_vertices = boundary_count;
-  m.tets.reserve(tets.size());
-  for (const auto& t0 : tets) {
-    std::array<uint32_t, 4> tet{order[t0[0]], order[t0[1]], order[t0[2]], order[t0[3]]};
+    m.nodes[v] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
+  m.surface_vertices = s.vertices.size();
+  m.surface_triangles = s.triangles;
+  m.tets.resize(out.numberoftetrahedra);
+  for (int t = 0; t < out.numberoftetrahedra; ++t) {
+    auto& tet = m.tets[t];
+    for (int k = 0; k < 4; ++k) tet[k] = static_cast<uint32_t>(out.tetrahedronlist[4 * t + k]);
     const Vec3 &a = m.nodes[tet[0]], &b = m.nodes[tet[1]], &c = m.nodes[tet[2]],
                &d = m.nodes[tet[3]];
     if (dot(cross(sub(b, a), sub(c, a)), sub(d, a)) < 0) std::swap(tet[2], tet[3]);
-    m.tets.push_back(tet);
-  }
-  for (const auto& [key, e] : faces) {
-    if (e.first != 1) continue;
-    std::array<uint32_t, 3> f{order[e.second[0]], order[e.second[1]], order[e.second[2]]};
-    const Vec3& opposite = m.nodes[order[e.second[3]]];
-    const Vec3 &a = m.nodes[f[0]], &b = m.nodes[f[1]], &c = m.nodes[f[2]];
-    if (dot(cross(sub(b, a), sub(c, a)), sub(opposite, a)) > 0) std::swap(f[1], f[2]);
-    m.surface_triangles.push_back(f);
   }
   return m;
 }

@@ -15,7 +15,7 @@ struct TetMesh {
   /// nodes[0, surface_vertices) are the input surface's vertices in their order: TetGen runs with
   /// -Y (no Steiner points on the surface; without it TetGen 1.5 can abort on poor surfaces).
   std::size_t surface_vertices = 0;
-  /// The boundary triangles, outward, indexing nodes[0, surface_vertices).
+  /// The boundary triangles, outward, indexing nodes[0, surface_vertices): the input's.
   std::vector<std::array<uint32_t, 3>> surface_triangles;
 };
 
