@@ -14,7 +14,8 @@ mkdir -p out
 # Mesh -> checked surface -> TetGen -> quadratic FEM -> modes below 20 kHz -> damping -> soundbank.
 $chladni precompute meshes/bar.obj -o out/bar.chbank --material steel --json out/bar.json
 $chladni precompute meshes/bowl.obj -o out/bowl.chbank --material brass --json out/bowl.json
-$chladni info out/bowl.chbank | head -24
+$chladni info out/bowl.chbank > out/bowl_info.txt
+head -n 24 out/bowl_info.txt
 # The bowl struck on its rim twice and the bar at an end and at its centre, on the CPU reference
 # and on the GPU filterbank (Vulkan; Mesa lavapipe when there is no GPU).
 $chladni render examples/bowl_and_bar.json -o out/bowl_and_bar.wav --normalize -1
