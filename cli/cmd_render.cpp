@@ -24,6 +24,13 @@ struct RenderArgs {
   bool quiet = false;
 };
 
+// Ends a summary line with the object's lowest damped frequencies.
+void print_lowest(const ModalModel& model) {
+  for (std::size_t i = 0; i < std::min<std::size_t>(5, model.mode_count()); ++i)
+    std::printf(" %.1f", model.damped_omega(i) / (2 * std::numbers::pi));
+  std::printf(" Hz\n");
+}
+
 // Builds each object's modal description; models must outlive the ObjectModes that point at them.
 void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>>& models,
                      std::vector<runtime::ObjectModes>& objects, bool quiet) {
@@ -49,10 +56,7 @@ void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>
               obj.name.c_str(), obj.bar.length, obj.bar.width, obj.bar.thickness,
               obj.bar.damping.to_string().c_str(), model->mode_count(), sel.overdamped,
               sel.below_band + sel.above_band);
-          for (std::size_t i = 0; i < std::min<std::size_t>(5, model->mode_count()); ++i) {
-            std::printf(" %.1f", model->damped_omega(i) / (2 * std::numbers::pi));
-          }
-          std::printf(" Hz\n");
+          print_lowest(*model);
         }
         models.push_back(std::move(model));
         objects.push_back(runtime::object_modes(*models.back()));
@@ -74,9 +78,7 @@ void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>
           std::printf("  %-12s soundbank %s (%s, %s): %zu modes (%zu above Nyquist); lowest",
                       obj.name.c_str(), obj.soundbank.c_str(), bank.material.name.c_str(),
                       bank.material.damping.to_string().c_str(), model->mode_count(), dropped);
-          for (std::size_t i = 0; i < std::min<std::size_t>(5, model->mode_count()); ++i)
-            std::printf(" %.1f", model->damped_omega(i) / (2 * std::numbers::pi));
-          std::printf(" Hz\n");
+          print_lowest(*model);
         }
         models.push_back(std::move(model));
         objects.push_back(runtime::object_modes(*models.back()));

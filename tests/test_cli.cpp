@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "chladni/core/audio_file.hpp"
+#include "test_support.hpp"
 
 namespace {
 
@@ -27,20 +28,10 @@ Result run(const std::string& args, const std::string& env = "") {
   return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
 }
 
-std::string temp(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / name).string();
-}
-
-std::string write_file(const std::string& name, const std::string& text) {
-  const std::string path = temp(name);
-  std::ofstream(path) << text;
-  return path;
-}
-
 }  // namespace
 
 TEST(Cli, RendersTheExampleSceneToAWav) {
-  const std::string out = temp("chladni_cli_example.wav");
+  const std::string out = chladni::test::temp_path("chladni_cli_example.wav");
   const Result r =
       run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + out + " --normalize -1");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -55,10 +46,10 @@ TEST(Cli, RendersTheExampleSceneToAWav) {
 }
 
 TEST(Cli, MalformedSceneExitsWith2AndNamesTheJsonPath) {
-  const std::string scene = write_file("chladni_cli_bad.json", R"({
+  const std::string scene = chladni::test::write_temp("chladni_cli_bad.json", R"({
     "objects": [{"name": "a", "modes": [{"frequency": 440, "decay": 1, "amplitude": 1}]}],
     "events": [{"time": 0.1, "type": "impact", "object": "b", "impulse": 1}]})");
-  const Result r = run("render " + scene + " -o " + temp("x.wav"));
+  const Result r = run("render " + scene + " -o " + chladni::test::temp_path("x.wav"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("$.events[0].object: unknown object 'b'"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find(scene), std::string::npos) << r.output;
@@ -66,20 +57,21 @@ TEST(Cli, MalformedSceneExitsWith2AndNamesTheJsonPath) {
 
 TEST(Cli, BadArgumentsExitWith2) {
   EXPECT_EQ(run("render").code, 2);
-  EXPECT_EQ(run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + temp("x.wav") +
-                " --backend tpu")
+  EXPECT_EQ(run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " +
+                chladni::test::temp_path("x.wav") + " --backend tpu")
                 .code,
             2);
-  EXPECT_EQ(run("render /nonexistent.json -o " + temp("x.wav")).code, 2);
+  EXPECT_EQ(run("render /nonexistent.json -o " + chladni::test::temp_path("x.wav")).code, 2);
   EXPECT_EQ(run("bench --modes 10,abc").code, 2);
   EXPECT_EQ(run("no-such-command").code, 2);
 }
 
 TEST(Cli, MissingVulkanDeviceFallsBackToCpuWithOneWarning) {
   // A selector that matches no device is how a machine without one looks to the backend.
-  const Result r = run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " +
-                           temp("chladni_cli_fallback.wav") + " --backend gpu --quiet",
-                       "CHLADNI_VULKAN_DEVICE=no-such-gpu");
+  const Result r =
+      run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " +
+              chladni::test::temp_path("chladni_cli_fallback.wav") + " --backend gpu --quiet",
+          "CHLADNI_VULKAN_DEVICE=no-such-gpu");
   EXPECT_EQ(r.code, 0) << r.output;
   std::size_t count = 0;
   for (std::size_t pos = 0; (pos = r.output.find("warning:", pos)) != std::string::npos; ++pos) {
@@ -90,7 +82,7 @@ TEST(Cli, MissingVulkanDeviceFallsBackToCpuWithOneWarning) {
 }
 
 TEST(Cli, BenchJsonHasEveryFieldForEveryBackend) {
-  const std::string json_path = temp("chladni_bench.json");
+  const std::string json_path = chladni::test::temp_path("chladni_bench.json");
   const Result r =
       run("bench --modes 1000,4000 --backend cpu,gpu --seconds 0.05 --json " + json_path);
   ASSERT_EQ(r.code, 0) << r.output;
@@ -108,7 +100,8 @@ TEST(Cli, BenchJsonHasEveryFieldForEveryBackend) {
 }
 
 TEST(CliPrecompute, BarToBankToInfoToRender) {
-  const std::string bank = temp("chladni_cli_bar.chbank"), summary = temp("chladni_cli_bar.json");
+  const std::string bank = chladni::test::temp_path("chladni_cli_bar.chbank"),
+                    summary = chladni::test::temp_path("chladni_cli_bar.json");
   Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank +
                  " --max-modes 6 --max-tet-volume 1e-6 --json " + summary);
   ASSERT_EQ(r.code, 0) << r.output;
@@ -132,11 +125,11 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.output.find("T60 (s)"), std::string::npos);
 
-  const std::string scene = write_file("chladni_cli_bank_scene.json", R"({
+  const std::string scene = chladni::test::write_temp("chladni_cli_bank_scene.json", R"({
     "objects": [{"name": "bar", "soundbank": ")" + bank + R"("}],
     "events": [{"time": 0.01, "type": "impact", "object": "bar", "impulse": 0.01, "vertex": 3}],
     "duration": 1.0})");
-  const std::string wav = temp("chladni_cli_bank.wav");
+  const std::string wav = chladni::test::temp_path("chladni_cli_bank.wav");
   r = run("render " + scene + " -o " + wav);
   ASSERT_EQ(r.code, 0) << r.output;
   const chladni::AudioBuffer a = chladni::read_audio(wav);
@@ -151,7 +144,7 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
     bytes.assign(std::istreambuf_iterator<char>(f), {});
   }
   bytes[bytes.size() - 9] ^= 0x40;  // inside the last section (SHAP)
-  const std::string bad = temp("chladni_cli_bad.chbank");
+  const std::string bad = chladni::test::temp_path("chladni_cli_bad.chbank");
   std::ofstream(bad, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
   r = run("info " + bad);
   EXPECT_EQ(r.code, 2);
@@ -160,16 +153,16 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
 
 TEST(CliPrecompute, BrokenMeshesExitWith2AndRepairGoesThrough) {
   Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/broken/elephant_with_holes.obj -o " +
-                 temp("chladni_e.chbank"));
+                 chladni::test::temp_path("chladni_e.chbank"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("not closed: 1353 boundary edges"), std::string::npos) << r.output;
   r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/broken/teapot_solid_selfintersecting.obj -o " +
-          temp("chladni_t.chbank"));
+          chladni::test::temp_path("chladni_t.chbank"));
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("35 pairs of faces intersect"), std::string::npos) << r.output;
   // Read as centimetres the teapot is 17.6 cm long: repaired, meshed coarsely and solved.
   r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/broken/teapot_solid_selfintersecting.obj -o " +
-          temp("chladni_t.chbank") +
+          chladni::test::temp_path("chladni_t.chbank") +
           " --unit cm --repair --order 1 --max-modes 4 --max-tet-volume 2e-6");
   EXPECT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("repaired: self-intersections: 35 face pairs -> 0"), std::string::npos)
@@ -177,7 +170,7 @@ TEST(CliPrecompute, BrokenMeshesExitWith2AndRepairGoesThrough) {
 }
 
 TEST(CliPrecompute, BadArgumentsNameTheProblem) {
-  const std::string out = temp("chladni_x.chbank");
+  const std::string out = chladni::test::temp_path("chladni_x.chbank");
   const std::string bar = CHLADNI_SOURCE_DIR "/meshes/bar.obj";
   Result r = run("precompute " + bar + " -o " + out + " --material unobtainium");
   EXPECT_EQ(r.code, 2);

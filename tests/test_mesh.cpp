@@ -10,6 +10,7 @@
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
 #include "fem_fixtures.hpp"
+#include "test_support.hpp"
 
 using namespace chladni;
 using namespace chladni::precompute;
@@ -17,15 +18,6 @@ using namespace chladni::precompute;
 namespace {
 
 const std::string kMeshes = CHLADNI_SHARED_MESHES;
-
-std::string temp(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / name).string();
-}
-std::string write(const std::string& name, const std::string& text) {
-  const std::string p = temp(name);
-  std::ofstream(p) << text;
-  return p;
-}
 
 // Unit cube, outward counter-clockwise triangles.
 const double kCubeV[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
@@ -45,7 +37,7 @@ std::string cube_obj() {
 }
 
 SurfaceMesh cube() {
-  return read_mesh(write("chladni_cube.obj", cube_obj()));
+  return read_mesh(chladni::test::write_temp("chladni_cube.obj", cube_obj()));
 }
 
 std::string message_of(const SurfaceMesh& m) {
@@ -87,7 +79,7 @@ TEST(MeshIo, ReadsTheSameCubeFromObjOffPlyAndStl) {
                                    {"c.off", off},
                                    {"c.ply", ply},
                                    {"c.STL", stl}}) {
-    const SurfaceMesh m = read_mesh(write("chladni_" + name, text), 0.01);
+    const SurfaceMesh m = read_mesh(chladni::test::write_temp("chladni_" + name, text), 0.01);
     EXPECT_EQ(m.triangles.size(), 12u) << name;
     const MeshReport r = check_mesh(m);
     EXPECT_TRUE(r.ok()) << name << ": " << message_of(m);
@@ -99,7 +91,8 @@ TEST(MeshIo, UnitsScaleCoordinates) {
   EXPECT_DOUBLE_EQ(unit_scale("mm"), 0.001);
   EXPECT_DOUBLE_EQ(unit_scale("cm"), 0.01);
   EXPECT_THROW(unit_scale("inch"), InputError);
-  const SurfaceMesh m = read_mesh(write("chladni_cube_u.obj", cube_obj()), unit_scale("mm") * 2);
+  const SurfaceMesh m =
+      read_mesh(chladni::test::write_temp("chladni_cube_u.obj", cube_obj()), unit_scale("mm") * 2);
   EXPECT_DOUBLE_EQ(m.vertices[6][0], 0.002);
 }
 
@@ -113,17 +106,23 @@ TEST(MeshIo, UnreadableFilesNameTheProblem) {
     return std::string();
   };
   EXPECT_NE(msg("/nonexistent/a.obj").find("no such mesh file"), std::string::npos);
-  EXPECT_NE(msg(write("chladni_x.xyz", "1 2 3\n")).find("unsupported mesh format"),
-            std::string::npos);
-  EXPECT_NE(msg(write("chladni_nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n"))
-                .find("chladni_nan.obj:3: vertex coordinate"),
-            std::string::npos);
-  EXPECT_NE(msg(write("chladni_bad.obj", "v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n"))
-                .find("chladni_bad.obj:2: 'zero' is not a number"),
-            std::string::npos);
-  EXPECT_FALSE(msg(write("chladni_idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")).empty());
-  EXPECT_FALSE(msg(write("chladni_garbage.off", "OFF\n3 1 0\n0 0 0\nhello\n")).empty());
-  EXPECT_FALSE(msg(write("chladni_empty.obj", "# nothing\n")).empty());
+  EXPECT_NE(
+      msg(chladni::test::write_temp("chladni_x.xyz", "1 2 3\n")).find("unsupported mesh format"),
+      std::string::npos);
+  EXPECT_NE(
+      msg(chladni::test::write_temp("chladni_nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n"))
+          .find("chladni_nan.obj:3: vertex coordinate"),
+      std::string::npos);
+  EXPECT_NE(
+      msg(chladni::test::write_temp("chladni_bad.obj", "v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n"))
+          .find("chladni_bad.obj:2: 'zero' is not a number"),
+      std::string::npos);
+  EXPECT_FALSE(
+      msg(chladni::test::write_temp("chladni_idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"))
+          .empty());
+  EXPECT_FALSE(
+      msg(chladni::test::write_temp("chladni_garbage.off", "OFF\n3 1 0\n0 0 0\nhello\n")).empty());
+  EXPECT_FALSE(msg(chladni::test::write_temp("chladni_empty.obj", "# nothing\n")).empty());
 }
 
 TEST(MeshCheck, BundledMeshesAreValidSolids) {

@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <memory>
 #include <span>
 
@@ -41,6 +43,17 @@ inline double max_diff(std::span<const float> a, std::span<const float> b) {
     m = std::max(m, double(std::abs(a[i] - b[i])));
   }
   return m;
+}
+
+/// A path in the system's temporary folder.
+inline std::string temp_path(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / name).string();
+}
+/// Writes `text` to temp_path(name) and returns that path.
+inline std::string write_temp(const std::string& name, const std::string& text) {
+  const std::string path = temp_path(name);
+  std::ofstream(path) << text;
+  return path;
 }
 
 #define CHLADNI_REQUIRE_GPU_OR_SKIP(ctx)     \

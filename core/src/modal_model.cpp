@@ -46,15 +46,12 @@ void ModalModel::validate() const {
   if (!normals.empty() && normals.size() != points.size()) {
     throw InputError(who + ": normals and points differ in count");
   }
-  auto finite3 = [](const Vec3& v) {
-    return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
-  };
   for (std::size_t v = 0; v < points.size(); ++v) {
-    if (!finite3(points[v]))
+    if (!is_finite(points[v]))
       throw InputError(who + ": point " + std::to_string(v) + " is not finite");
   }
   for (std::size_t k = 0; k < shapes.size(); ++k) {
-    if (!finite3(shapes[k])) {
+    if (!is_finite(shapes[k])) {
       throw InputError(who + ": shape of mode " + std::to_string(k / points.size()) + " at point " +
                        std::to_string(k % points.size()) + " is not finite");
     }

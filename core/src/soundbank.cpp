@@ -111,10 +111,6 @@ constexpr uint32_t make_tag(const char (&t)[5]) {
 constexpr uint32_t kMeta = make_tag("META"), kMatl = make_tag("MATL"), kMode = make_tag("MODE"),
                    kSurf = make_tag("SURF"), kShap = make_tag("SHAP"), kXfer = make_tag("XFER");
 
-bool finite3(const Vec3& v) {
-  return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
-}
-
 }  // namespace
 
 void Soundbank::validate() const {
@@ -134,7 +130,7 @@ void Soundbank::validate() const {
   }
   if (nv == 0) throw InputError("soundbank: the surface has no vertices");
   for (std::size_t v = 0; v < nv; ++v)
-    if (!finite3(vertices[v]))
+    if (!is_finite(vertices[v]))
       throw InputError("soundbank: surface vertex " + std::to_string(v) + " is not finite");
   for (std::size_t t = 0; t < triangles.size(); ++t)
     for (uint32_t idx : triangles[t])

@@ -109,30 +109,32 @@ class SplitShiftInvert {
                        "stiffness is not positive semi-definite; lower --max-freq or raise "
                        "--max-tet-volume");
   }
-  // y = C x
+  // y = C x, for Spectra.
   void perform_op(const double* x, double* y) const {
-    const auto t0 = std::chrono::steady_clock::now();
     w_ = Eigen::Map<const Eigen::VectorXd>(x, rows());
-    factor_.upper_solve(w_);
-    Eigen::VectorXd z = M_ * w_;
-    factor_.lower_solve(z);
-    Eigen::Map<Eigen::VectorXd>(y, rows()) = z;
-    solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    apply(w_);
+    Eigen::Map<Eigen::VectorXd>(y, rows()) = w_;
   }
   // W = C V for a block of vectors: the factor and M are read once for all columns.
   void apply_block(const Eigen::MatrixXd& V, Eigen::MatrixXd& W) const {
-    const auto t0 = std::chrono::steady_clock::now();
-    Eigen::MatrixXd X = V;
-    factor_.upper_solve(X);
-    W.noalias() = M_ * X;
-    factor_.lower_solve(W);
-    solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    W = V;
+    apply(W);
   }
   // Each column y <- P^T L^-T y, a vector of the original problem.
   void to_modes(Eigen::MatrixXd& Y) { factor_.upper_solve(Y); }
   mutable double solve_seconds = 0;
 
  private:
+  // X <- C X = L^-1 P M P^T L^-T X
+  template <class Dense>
+  void apply(Dense& X) const {
+    const auto t0 = std::chrono::steady_clock::now();
+    factor_.upper_solve(X);
+    Dense MX = M_ * X;
+    factor_.lower_solve(MX);
+    X = std::move(MX);
+    solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
   const SparseMatrix& K_;
   const SparseMatrix& M_;
   mutable Factor factor_;  // CHOLMOD's workspace changes during solves

@@ -138,7 +138,7 @@ MeshReport check_mesh(const SurfaceMesh& m) {
   r.bbox_min = {INFINITY, INFINITY, INFINITY};
   r.bbox_max = {-INFINITY, -INFINITY, -INFINITY};
   for (const Vec3& v : m.vertices) {
-    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || !std::isfinite(v[2])) {
+    if (!is_finite(v)) {
       ++r.nonfinite_vertices;
       continue;
     }

@@ -102,7 +102,7 @@ SurfaceMesh read_mesh(const std::string& path, double scale) {
   for (std::size_t v = 0; v < points.size(); ++v) {
     const Point& p = points[v];
     const Vec3 q{p.x() * scale, p.y() * scale, p.z() * scale};
-    if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2]))
+    if (!is_finite(q))
       throw InputError(path + ": vertex " + std::to_string(v) + " has a non-finite coordinate");
     m.vertices.push_back(q);
   }

@@ -1,6 +1,7 @@
 #pragma once
 // The 3-vector used for positions, normals and mode shapes, and the few operations on it.
 #include <array>
+#include <cmath>
 
 namespace chladni {
 
@@ -14,6 +15,9 @@ inline double dot(const Vec3& a, const Vec3& b) {
 }
 inline Vec3 cross(const Vec3& a, const Vec3& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+inline bool is_finite(const Vec3& v) {
+  return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]);
 }
 /// (b - a) x (c - a): the normal of triangle abc, of length twice its area.
 inline Vec3 triangle_normal(const Vec3& a, const Vec3& b, const Vec3& c) {
