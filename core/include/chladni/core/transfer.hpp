@@ -1,0 +1,54 @@
+#pragma once
+// Acoustic transfer of a modal object: per mode, the far-field multipole expansion of the pressure
+// it radiates per unit modal amplitude (DESIGN.md conventions, e^(-i w t)):
+//   p(x) = sum_(l<=L) sum_m c_lm h_l(k r) Y_lm(x^),   x = position - centre in the object frame,
+// with real orthonormal Y_lm (core/spherical.hpp). Stored as a_lm = c_lm h_l(k R): each term's
+// pressure at the reference radius R, which keeps every number in float range and makes the
+// coefficients' sizes mean something (Pa). Valid for r >= R, the radius of the sphere about the
+// centre that encloses the surface; nearer points are evaluated at R in their direction.
+#include <complex>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "chladni/core/vec3.hpp"
+
+namespace chladni {
+
+struct ModeTransfer {
+  double wavenumber = 0;      ///< k = omega / c (rad/m)
+  uint32_t order = 0;         ///< L
+  uint32_t sources = 0;       ///< equivalent sources used in the fit
+  float fit_residual = 0;     ///< relative residual of the Neumann fit at collocation points
+  float held_out_error = 0;   ///< relative Neumann error at held-out surface points
+  float expansion_error = 0;  ///< relative error of the expansion against the sources at 2R
+  uint64_t offset = 0;        ///< first coefficient in Transfer::coefficients
+};
+
+struct Transfer {
+  /// Fits whose held-out error exceeds this are flagged as poor (chladni info).
+  static constexpr float kPoorFit = 0.2f;
+
+  Vec3 centre{0, 0, 0};        ///< expansion centre (m, object frame)
+  double radius = 0;           ///< R (m)
+  double sound_speed = 343.0;  ///< c (m/s)
+  double air_density = 1.204;  ///< rho0 (kg/m^3)
+  std::vector<ModeTransfer> modes;
+  std::vector<std::complex<float>> coefficients;  ///< a_lm per mode, (L+1)^2 each, sh_index order
+
+  std::size_t mode_count() const { return modes.size(); }
+  const std::complex<float>* coefficients_of(std::size_t mode) const {
+    return coefficients.data() + modes[mode].offset;
+  }
+  /// Appends one mode's expansion (coefficients a_lm, (order+1)^2 of them).
+  void add_mode(ModeTransfer mode, const std::vector<std::complex<double>>& a);
+  /// Complex pressure per unit modal amplitude at x (object frame), in double precision.
+  std::complex<double> pressure(std::size_t mode, const Vec3& x) const;
+  bool poor(std::size_t mode) const { return !(modes[mode].held_out_error <= kPoorFit); }
+  /// Throws InputError naming the first bad count, order or non-finite value.
+  void validate() const;
+  /// The listed modes only, in that order.
+  Transfer subset(const std::vector<std::size_t>& kept) const;
+};
+
+}  // namespace chladni

@@ -1,0 +1,123 @@
+#pragma once
+// Acoustic transfer by equivalent sources (after James, Barbic & Pai 2006, "Precomputed Acoustic
+// Transfer"): for a mode vibrating at wavenumber k, monopoles placed inside the object are fitted
+// by regularized least squares to the Neumann condition dp/dn = i omega rho0 u_n (e^(-i w t)) at
+// surface collocation points, then re-expanded into one multipole series about the centre
+// (core/transfer.hpp). The dense kernels run on the CPU (double) or the GPU (float); the solve is
+// Eigen's Householder QR in double on the CPU.
+#include <array>
+#include <complex>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "chladni/core/soundbank.hpp"
+#include "chladni/core/transfer.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+#include "chladni/precompute/transfer_kernels.hpp"
+
+namespace chladni::precompute {
+
+struct AcousticOptions {
+  double sound_speed = 343.0;  ///< m/s
+  double air_density = 1.204;  ///< kg/m^3 (air at 20 C)
+  int order = 0;               ///< fixed expansion order L; 0: per mode from k and the sources
+  int max_order = 40;
+  std::size_t min_sources = 128;
+  std::size_t max_sources = 1024;
+  double sources_per_term = 2.0;  ///< sources ~ this x (kR + 3)^2, the field's degrees of freedom
+  double source_depth = 2.0;      ///< inward offset in source spacings (capped by the thickness)
+  std::size_t max_collocation = 4096;
+  /// Collocation points: this many per source, at least min_collocation (rounded up to a level of
+  /// the farthest-point order; a fine quadrature keeps spurious low orders out of the far field).
+  double collocation_per_source = 8.0;
+  std::size_t min_collocation = 1024;
+  std::size_t held_out = 1000;   ///< surface points kept out of the fit to measure its error
+  double regularization = 1e-6;  ///< Tikhonov weight on column-normalized sources
+  double truncation = 1e-3;      ///< drop the orders carrying less than this at r = 2R
+  int threads = 0;               ///< modes fitted in parallel (0: all cores)
+  void validate() const;         ///< throws InputError naming the bad field
+};
+
+/// Normal velocity (m/s, complex amplitude) at barycentric point `b` of triangle `t`.
+using NormalVelocity =
+    std::function<std::complex<double>(uint32_t t, const std::array<double, 3>& b)>;
+
+/// A closed surface prepared for fits: centre and radius, source anchors with their inward depth,
+/// collocation levels with quadrature weights, held-out points. Geometry work shared by all modes.
+class RadiatingSurface {
+ public:
+  RadiatingSurface(const SurfaceMesh& mesh, const AcousticOptions& options);
+
+  const SurfaceMesh& mesh() const { return mesh_; }
+  const Vec3& centre() const { return centre_; }
+  double radius() const { return radius_; }
+  double area() const { return area_; }
+  const Vec3& face_normal(uint32_t t) const { return face_normal_[t]; }
+  const std::vector<Vec3>& vertex_normals() const { return vertex_normal_; }
+
+  /// Normal velocity interpolated from per-vertex values (m/s).
+  NormalVelocity from_vertex_values(std::span<const std::complex<double>> un) const;
+  /// u_n = -i omega (v . n) of a mode whose shape at the vertices is `shape` (xyz per vertex).
+  NormalVelocity from_mode_shape(const float* shape, double omega) const;
+
+ private:
+  friend struct SourceFitter;
+  SurfaceMesh mesh_;
+  Vec3 centre_{0, 0, 0};
+  double radius_ = 0, area_ = 0;
+  std::vector<Vec3> face_normal_, vertex_normal_, centroid_;
+  std::vector<double> face_area_;
+  std::vector<uint32_t> anchors_;     // vertices in farthest-point order
+  std::vector<double> anchor_depth_;  // distance to the opposite surface along -n
+  struct Level {
+    std::size_t count;
+    std::vector<double> weight;  // quadrature area of each of the first `count` triangles
+  };
+  std::vector<uint32_t> colloc_order_;  // triangles in farthest-point order
+  std::vector<Level> levels_;
+  std::vector<std::pair<uint32_t, std::array<double, 3>>> held_;  // triangle, barycentric
+  std::vector<double> held_weight_;
+};
+
+/// Equivalent sources fitted for one frequency. Positions are relative to the surface's centre.
+struct SourceFit {
+  double k = 0;
+  std::vector<Vec3> sources;
+  std::vector<std::complex<double>> strength;
+  double residual = 0;  ///< relative weighted residual at the collocation points
+  double held_out = 0;  ///< relative error at the held-out points
+};
+
+/// Seconds spent per stage, summed over calls.
+struct TransferTimes {
+  double matrix = 0;  ///< collocation and held-out matrices (the kernels)
+  double solve = 0;   ///< regularized least squares (CPU)
+  double expand = 0;  ///< re-expansion into a_lm and its check at 2R
+};
+
+SourceFit fit_sources(const RadiatingSurface& surface, double k, const NormalVelocity& un,
+                      const AcousticOptions& options, TransferKernels& kernels,
+                      TransferTimes* times = nullptr);
+
+/// Pressure (Pa) of the fitted sources at absolute points.
+std::vector<std::complex<double>> source_pressure(const RadiatingSurface& surface,
+                                                  const SourceFit& fit,
+                                                  std::span<const Vec3> points,
+                                                  TransferKernels& kernels);
+
+/// Re-expands the sources into a_lm about the centre (core/transfer.hpp): c_lm = i k sum_s q_s
+/// j_l(k r_s) Y_lm(y_s) (addition theorem for e^(ikr)/(4 pi r)), a_lm = c_lm h_l(k R), orders
+/// trimmed by options.truncation; expansion_error compares it with the sources at r = 2R.
+ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fit,
+                            const AcousticOptions& options, TransferKernels& kernels,
+                            std::vector<std::complex<double>>& a, TransferTimes* times = nullptr);
+
+/// Transfer of every mode of a bank whose surface is `surface` (the bank's SURF). `progress`
+/// gets (modes done, modes total).
+Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank,
+                          const AcousticOptions& options, TransferKernels& kernels,
+                          TransferTimes* times = nullptr,
+                          const std::function<void(std::size_t, std::size_t)>& progress = {});
+
+}  // namespace chladni::precompute
