@@ -177,9 +177,12 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
       const uint32_t v = anchors_[i];
       const double d =
           ray_depth(mesh_, mesh_.vertices[v], scaled(vertex_normal_[v], -1.0), v, 1e-9 * radius_);
-      anchor_depth_[i] = std::isfinite(d) ? d : 2.0 * radius_;
+      anchor_depth_[i] = std::min(std::isfinite(d) ? 0.45 * d : radius_, 0.5 * radius_);
     }
   });
+  std::vector<double> depths = anchor_depth_;
+  std::nth_element(depths.begin(), depths.begin() + long(depths.size() / 2), depths.end());
+  typical_depth_ = depths[depths.size() / 2];
 
   // Collocation: triangles in farthest-point order; at each level the first `count` of them carry
   // the area of the triangles nearest to them (a Voronoi quadrature of the surface).
@@ -255,14 +258,19 @@ struct SourceFitter {
     f.k = k;
     const double omega = k * o.sound_speed;
     // Sources ~ the field's multipole degrees of freedom at this k.
+    // and no sparser than their depth allows (thin walls need close sources).
     const double terms = (k * s.radius_ + 3.0) * (k * s.radius_ + 3.0);
+    const double wanted =
+        std::max(o.sources_per_term * terms, s.area_ / (s.typical_depth_ * s.typical_depth_));
     const std::size_t ns =
-        std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(o.sources_per_term * terms)),
-                                o.min_sources, std::min(o.max_sources, s.anchors_.size()));
+        std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(wanted)), o.min_sources,
+                                std::min(o.max_sources, s.anchors_.size()));
     const double spacing = std::sqrt(s.area_ / double(ns));
     for (std::size_t i = 0; i < ns; ++i) {
       const uint32_t v = s.anchors_[i];
-      const double depth = std::min(o.source_depth * spacing, 0.25 * s.anchor_depth_[i]);
+      // Inside the wall (below its middle) and not deeper than R/2: deep sources must cancel each
+      // other to make the surface's detail, which single precision cannot afford.
+      const double depth = std::min(o.source_depth * spacing, s.anchor_depth_[i]);
       f.sources.push_back(
           sub(sub(s.mesh_.vertices[v], scaled(s.vertex_normal_[v], depth)), s.centre_));
     }

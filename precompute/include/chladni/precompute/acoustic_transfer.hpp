@@ -69,7 +69,8 @@ class RadiatingSurface {
   std::vector<Vec3> face_normal_, vertex_normal_, centroid_;
   std::vector<double> face_area_;
   std::vector<uint32_t> anchors_;     // vertices in farthest-point order
-  std::vector<double> anchor_depth_;  // distance to the opposite surface along -n
+  std::vector<double> anchor_depth_;  // deepest source offset: below mid-wall, at most R/2
+  double typical_depth_ = 0;          // median of anchor_depth_
   struct Level {
     std::size_t count;
     std::vector<double> weight;  // quadrature area of each of the first `count` triangles
