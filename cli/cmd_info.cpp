@@ -43,8 +43,20 @@ void run_info(const InfoArgs& a) {
                      {"damping", b.material.damping.to_string()},
                      {"source", b.material.source}};
     j["surface"] = {{"vertices", b.vertices.size()}, {"triangles", b.triangles.size()}};
-    j["transfer"] =
-        b.transfer.empty() ? nlohmann::json(nullptr) : nlohmann::json(b.transfer.size());
+    if (b.transfer) {
+      const Transfer& t = *b.transfer;
+      std::size_t poor = 0;
+      for (std::size_t i = 0; i < t.mode_count(); ++i) poor += t.poor(i);
+      j["transfer"] = {{"centre", t.centre},
+                       {"radius_m", t.radius},
+                       {"sound_speed", t.sound_speed},
+                       {"air_density", t.air_density},
+                       {"coefficients", t.coefficients.size()},
+                       {"poor_fit_threshold", Transfer::kPoorFit},
+                       {"poor_fits", poor}};
+    } else {
+      j["transfer"] = nullptr;
+    }
     nlohmann::json modes = nlohmann::json::array();
     for (std::size_t i = 0; i < b.mode_count(); ++i) {
       const auto r = row(i);
@@ -54,6 +66,15 @@ void run_info(const InfoArgs& a) {
            {"damping_ratio", r.zeta},
            {"t60_s", std::isfinite(r.t60) ? nlohmann::json(r.t60) : nlohmann::json(nullptr)},
            {"residual", r.res}});
+      if (b.transfer) {
+        const ModeTransfer& m = b.transfer->modes[i];
+        modes.back()["transfer"] = {{"order", m.order},
+                                    {"sources", m.sources},
+                                    {"fit_residual", m.fit_residual},
+                                    {"held_out_error", m.held_out_error},
+                                    {"expansion_error", m.expansion_error},
+                                    {"poor_fit", b.transfer->poor(i)}};
+      }
     }
     j["modes"] = modes;
     std::printf("%s\n", j.dump(2).c_str());
@@ -66,15 +87,33 @@ void run_info(const InfoArgs& a) {
   std::printf("damping   %s\n", b.material.damping.to_string().c_str());
   if (!b.material.source.empty()) std::printf("source    %s\n", b.material.source.c_str());
   std::printf("surface   %zu vertices, %zu triangles\n", b.vertices.size(), b.triangles.size());
-  std::printf("transfer  %s\n", b.transfer.empty() ? "none" : "present");
+  std::size_t poor = 0;
+  if (b.transfer) {
+    const Transfer& t = *b.transfer;
+    for (std::size_t i = 0; i < t.mode_count(); ++i) poor += t.poor(i);
+    std::printf("transfer  multipole about (%.4g, %.4g, %.4g) m, R %.4g m, c %.4g m/s, rho0 %.4g "
+                "kg/m^3; %zu coefficients; %zu poor fits (held-out error > %.0f%%)\n",
+                t.centre[0], t.centre[1], t.centre[2], t.radius, t.sound_speed, t.air_density,
+                t.coefficients.size(), poor, 100.0 * Transfer::kPoorFit);
+  } else {
+    std::printf("transfer  none (listener gains use a compact-source estimate)\n");
+  }
   if (meta.is_object())
     for (const auto& [k, v] : meta.items())
       std::printf("meta      %s: %s\n", k.c_str(), v.dump().c_str());
-  std::printf("%zu modes\n%6s %12s %12s %12s %10s %10s\n", b.mode_count(), "mode", "freq (Hz)",
+  std::printf("%zu modes\n%6s %12s %12s %12s %10s %10s", b.mode_count(), "mode", "freq (Hz)",
               "decay (1/s)", "damp. ratio", "T60 (s)", "residual");
+  if (b.transfer) std::printf(" %5s %7s %9s %9s %9s", "order", "sources", "fit res.", "held-out", "expansion");
+  std::printf("\n");
   for (std::size_t i = 0; i < b.mode_count(); ++i) {
     const auto r = row(i);
-    std::printf("%6zu %12.2f %12.4g %12.3g %10.3g %10.2g\n", i, r.f, r.d, r.zeta, r.t60, r.res);
+    std::printf("%6zu %12.2f %12.4g %12.3g %10.3g %10.2g", i, r.f, r.d, r.zeta, r.t60, r.res);
+    if (b.transfer) {
+      const ModeTransfer& m = b.transfer->modes[i];
+      std::printf(" %5u %7u %9.2e %9.2e %9.2e%s", m.order, m.sources, m.fit_residual,
+                  m.held_out_error, m.expansion_error, b.transfer->poor(i) ? "  POOR FIT" : "");
+    }
+    std::printf("\n");
   }
 }
 

@@ -25,7 +25,20 @@ Soundbank small_bank() {
   const float s = float(1 / std::sqrt(3.0));
   b.normals = {{-s, -s, -s}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   for (int i = 0; i < 2 * 4 * 3; ++i) b.shapes.push_back(0.25f * float(i) - 1.0f);
-  b.transfer = {1, 2, 3, 4, 5};
+  Transfer t;
+  t.centre = {0.25, 0.25, 0.25};
+  t.radius = 0.9;
+  for (uint32_t i = 0; i < 2; ++i) {
+    ModeTransfer m;
+    m.wavenumber = b.omega[i] / t.sound_speed;
+    m.order = i + 1;
+    m.sources = 130 + i;
+    m.fit_residual = 0.01f * float(i + 1), m.held_out_error = 0.3f * float(i), m.expansion_error = 1e-4f;
+    std::vector<std::complex<double>> a((i + 2) * (i + 2));
+    for (std::size_t k = 0; k < a.size(); ++k) a[k] = {0.5 * double(k), -1.0 / double(k + 1)};
+    t.add_mode(m, a);
+  }
+  b.transfer = t;
   return b;
 }
 
@@ -74,8 +87,27 @@ TEST(Soundbank, RoundTripsEveryField) {
   EXPECT_EQ(b.triangles, a.triangles);
   EXPECT_EQ(b.normals, a.normals);
   EXPECT_EQ(b.shapes, a.shapes);
-  EXPECT_EQ(b.transfer, a.transfer);
+  ASSERT_TRUE(b.transfer.has_value());
+  EXPECT_EQ(b.transfer->centre, a.transfer->centre);
+  EXPECT_EQ(b.transfer->radius, a.transfer->radius);
+  EXPECT_EQ(b.transfer->coefficients, a.transfer->coefficients);
+  for (std::size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(b.transfer->modes[i].order, a.transfer->modes[i].order);
+    EXPECT_EQ(b.transfer->modes[i].offset, a.transfer->modes[i].offset);
+    EXPECT_EQ(b.transfer->modes[i].wavenumber, a.transfer->modes[i].wavenumber);
+    EXPECT_EQ(b.transfer->modes[i].held_out_error, a.transfer->modes[i].held_out_error);
+  }
+  EXPECT_FALSE(b.transfer->poor(0));
+  EXPECT_TRUE(b.transfer->poor(1));
   std::filesystem::remove(path);
+}
+
+TEST(Soundbank, TransferIsOptional) {
+  Soundbank b = small_bank();
+  b.transfer.reset();
+  const Soundbank a = parse_soundbank(serialize_soundbank(b), "t.chbank");
+  EXPECT_FALSE(a.transfer.has_value());
+  EXPECT_FALSE(to_modal_model(a, "x").transfer.has_value());
 }
 
 TEST(Soundbank, IsLittleEndianWithTheDocumentedHeader) {
@@ -135,7 +167,10 @@ TEST(Soundbank, UnknownMajorVersionIsRefused) {
   const uint32_t crc = uint32_t(crc32(crc32(0L, Z_NULL, 0), f.data(), 28));
   for (int k = 0; k < 4; ++k) f[28 + k] = uint8_t(crc >> (8 * k));
   const std::string err = error_of(f);
-  EXPECT_NE(err.find("format version 2.0 is not supported"), std::string::npos) << err;
+  EXPECT_NE(err.find("format version 2." + std::to_string(Soundbank::kVersionMinor) +
+                     " is not supported"),
+            std::string::npos)
+      << err;
 }
 
 TEST(Soundbank, RandomByteFlipsNeverCrash) {
@@ -169,6 +204,24 @@ TEST(Soundbank, InvalidContentIsRefusedBeforeWriting) {
   b = small_bank();
   b.shapes.pop_back();
   EXPECT_THROW(serialize_soundbank(b), InputError);
+  // Transfer: a NaN coefficient, a mode count that is not the bank's, a coefficient short.
+  auto message = [](const Soundbank& bad) {
+    try {
+      serialize_soundbank(bad);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  b = small_bank();
+  b.transfer->coefficients[3] = {std::nanf(""), 0.0f};
+  EXPECT_NE(message(b).find("coefficient 3 is not finite"), std::string::npos) << message(b);
+  b = small_bank();
+  b.transfer->modes.pop_back();
+  EXPECT_NE(message(b).find("transfer has 1 modes but the bank has 2"), std::string::npos);
+  b = small_bank();
+  b.transfer->coefficients.pop_back();
+  EXPECT_NE(message(b).find("needs more coefficients"), std::string::npos) << message(b);
 }
 
 TEST(Soundbank, ModalModelCarriesShapesAndRadiation) {
@@ -178,5 +231,15 @@ TEST(Soundbank, ModalModelCarriesShapesAndRadiation) {
   EXPECT_EQ(m.points.size(), 4u);
   EXPECT_FLOAT_EQ(float(m.shape(1, 2)[1]), b.shapes[(1 * 4 + 2) * 3 + 1]);
   for (double r : m.radiation) EXPECT_GT(r, 0);
+  ASSERT_TRUE(m.transfer.has_value());
+  EXPECT_EQ(m.transfer->mode_count(), 2u);
   EXPECT_NO_THROW(m.validate());
+  // keep_modes keeps the transfer of the kept modes only.
+  ModalModel k = m;
+  keep_modes(k, {1});
+  ASSERT_TRUE(k.transfer.has_value());
+  ASSERT_EQ(k.transfer->mode_count(), 1u);
+  EXPECT_EQ(k.transfer->modes[0].order, 2u);
+  EXPECT_EQ(k.transfer->coefficients.size(), 9u);
+  EXPECT_EQ(k.transfer->coefficients[4], m.transfer->coefficients_of(1)[4]);
 }

@@ -43,6 +43,12 @@ void ModalModel::validate() const {
     throw InputError(who + ": " + std::to_string(shapes.size()) + " shape vectors for " +
                      std::to_string(n) + " modes x " + std::to_string(points.size()) + " points");
   }
+  if (transfer) {
+    if (transfer->mode_count() != n)
+      throw InputError(who + ": transfer has " + std::to_string(transfer->mode_count()) +
+                       " modes for " + std::to_string(n));
+    transfer->validate();
+  }
   if (!normals.empty() && normals.size() != points.size()) {
     throw InputError(who + ": normals and points differ in count");
   }
@@ -87,6 +93,7 @@ void keep_modes(ModalModel& model, const std::vector<std::size_t>& kept) {
   out.name = model.name;
   out.points = model.points;
   out.normals = model.normals;
+  if (model.transfer) out.transfer = model.transfer->subset(kept);
   for (std::size_t i : kept) {
     out.omega.push_back(model.omega[i]);
     out.decay.push_back(model.decay[i]);

@@ -152,6 +152,12 @@ void Soundbank::validate() const {
     if (!std::isfinite(shapes[k]))
       throw InputError("soundbank: shape of mode " + std::to_string(k / (3 * nv)) + " at vertex " +
                        std::to_string((k / 3) % nv) + " is not finite");
+  if (transfer) {
+    if (transfer->mode_count() != n)
+      throw InputError("soundbank: transfer has " + std::to_string(transfer->mode_count()) +
+                       " modes but the bank has " + std::to_string(n));
+    transfer->validate();
+  }
 }
 
 std::vector<uint8_t> serialize_soundbank(const Soundbank& b) {
@@ -195,9 +201,18 @@ std::vector<uint8_t> serialize_soundbank(const Soundbank& b) {
     for (float s : b.shapes) w.le(s);
     sections.emplace_back(kShap, std::move(w));
   }
-  if (!b.transfer.empty()) {
+  if (b.transfer) {
+    const Transfer& t = *b.transfer;
     Writer w;
-    w.u8s(b.transfer.data(), b.transfer.size());
+    w.le<uint32_t>(static_cast<uint32_t>(t.modes.size())), w.le<uint32_t>(0);
+    w.le(t.centre[0]), w.le(t.centre[1]), w.le(t.centre[2]);
+    w.le(t.radius), w.le(t.sound_speed), w.le(t.air_density);
+    for (const ModeTransfer& m : t.modes) {
+      w.le(m.wavenumber), w.le(m.order), w.le(m.sources);
+      w.le(m.fit_residual), w.le(m.held_out_error), w.le(m.expansion_error), w.le<uint32_t>(0);
+    }
+    w.le<uint64_t>(t.coefficients.size());
+    for (const auto& z : t.coefficients) w.le(z.real()), w.le(z.imag());
     sections.emplace_back(kXfer, std::move(w));
   }
 
@@ -340,8 +355,47 @@ Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& 
     for (float& s : b.shapes) s = r.le<float>();
     r.expect_end();
   }
-  if (auto it = found.find(kXfer); it != found.end())
-    b.transfer.assign(it->second.first, it->second.first + it->second.second);
+  if (found.count(kXfer)) {
+    Reader r = section(kXfer);
+    Transfer t;
+    const auto n = r.le<uint32_t>();
+    r.le<uint32_t>();
+    if (n != b.omega.size())
+      r.fail("holds " + std::to_string(n) + " modes, but the bank has " +
+             std::to_string(b.omega.size()));
+    t.centre = {r.le<double>(), r.le<double>(), r.le<double>()};
+    t.radius = r.le<double>(), t.sound_speed = r.le<double>(), t.air_density = r.le<double>();
+    r.need_items(n, 40, "mode transfers");
+    uint64_t total = 0;
+    for (uint32_t i = 0; i < n; ++i) {
+      ModeTransfer m;
+      m.wavenumber = r.le<double>();
+      m.order = r.le<uint32_t>(), m.sources = r.le<uint32_t>();
+      m.fit_residual = r.le<float>(), m.held_out_error = r.le<float>();
+      m.expansion_error = r.le<float>();
+      r.le<uint32_t>();
+      if (m.order > 200) r.fail("mode " + std::to_string(i) + " has order " + std::to_string(m.order));
+      m.offset = total;
+      total += uint64_t(m.order + 1) * (m.order + 1);
+      t.modes.push_back(m);
+    }
+    const auto nc = r.le<uint64_t>();
+    if (nc != total)
+      r.fail(std::to_string(nc) + " coefficients, but the orders need " + std::to_string(total));
+    r.need_items(nc, 8, "coefficients");
+    t.coefficients.resize(nc);
+    for (auto& z : t.coefficients) {
+      const float re = r.le<float>(), im = r.le<float>();
+      z = {re, im};
+    }
+    r.expect_end();
+    try {
+      t.validate();
+    } catch (const InputError& e) {
+      r.fail(e.what());
+    }
+    b.transfer = std::move(t);
+  }
   try {
     b.validate();
   } catch (const InputError& e) {
@@ -381,9 +435,11 @@ Soundbank read_soundbank(const std::string& path) {
 }
 
 ModalModel to_modal_model(const Soundbank& b, const std::string& name) {
-  constexpr double rho0 = 1.204, c0 = 343.0;
+  const double rho0 = b.transfer ? b.transfer->air_density : 1.204;
+  const double c0 = b.transfer ? b.transfer->sound_speed : 343.0;
   ModalModel m;
   m.name = name;
+  m.transfer = b.transfer;
   m.omega = b.omega;
   m.decay = b.decay;
   m.points = b.vertices;

@@ -4,10 +4,12 @@
 // shape at surface sample points so that impacts can be placed.
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "chladni/core/damping.hpp"
+#include "chladni/core/transfer.hpp"
 #include "chladni/core/vec3.hpp"
 
 namespace chladni {
@@ -16,13 +18,16 @@ struct ModalModel {
   std::string name;
   std::vector<double> omega;  ///< undamped angular frequency omega_i (rad/s)
   std::vector<double> decay;  ///< decay rate d_i = c_i / 2 (1/s)
-  /// Pressure at 1 m per unit modal acceleration (until acoustic transfer lands: a constant).
+  /// Pressure at 1 m per unit modal acceleration: a compact-source estimate, used without transfer.
   std::vector<double> radiation;
   /// Surface sample points (m, object frame) and mode shapes there:
   /// shape(i, v) = shapes[(i * points.size() + v)], one 3-vector per mode and point.
   std::vector<Vec3> points;
   std::vector<Vec3> normals;  ///< outward unit normal per point (may be empty)
   std::vector<Vec3> shapes;
+  /// Far-field multipole expansion per mode (soundbanks precomputed with transfer); when present
+  /// the listener gain of mode i is |p_i(listener)| instead of radiation_i omega_d^2 / r.
+  std::optional<Transfer> transfer;
 
   std::size_t mode_count() const { return omega.size(); }
   bool has_geometry() const { return !points.empty(); }

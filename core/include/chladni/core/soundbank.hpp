@@ -3,17 +3,19 @@
 // little-endian binary with a section table and a CRC-32 per section (docs/soundbank-format.md).
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "chladni/core/material.hpp"
 #include "chladni/core/modal_model.hpp"
+#include "chladni/core/transfer.hpp"
 
 namespace chladni {
 
 struct Soundbank {
   static constexpr uint16_t kVersionMajor = 1;
-  static constexpr uint16_t kVersionMinor = 0;
+  static constexpr uint16_t kVersionMinor = 1;  ///< 1.1: XFER holds a Transfer
 
   std::string metadata_json = "{}";  ///< META: free-form JSON (source mesh, settings, timings)
   Material material;                 ///< MATL: elastic constants and damping model
@@ -25,7 +27,7 @@ struct Soundbank {
   std::vector<std::array<float, 3>> normals;       ///< SURF: outward unit vertex normals
   /// SHAP: mass-normalized mode shapes at the surface vertices, [mode][vertex][xyz].
   std::vector<float> shapes;
-  std::vector<uint8_t> transfer;  ///< XFER: acoustic transfer (reserved; empty until written)
+  std::optional<Transfer> transfer;  ///< XFER: acoustic transfer per mode (optional)
 
   std::size_t mode_count() const { return omega.size(); }
   /// Throws InputError naming the first inconsistent count, bad index or non-finite value.
@@ -41,8 +43,8 @@ Soundbank read_soundbank(const std::string& path);
 Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& origin);
 std::vector<uint8_t> serialize_soundbank(const Soundbank& bank);
 
-/// The runtime's view of a bank: modes, surface points, normals and shapes. Until acoustic
-/// transfer is stored, each mode's radiation gain is the compact-source estimate
+/// The runtime's view of a bank: modes, surface points, normals, shapes and transfer. Each mode's
+/// radiation gain (used without transfer) is the compact-source estimate
 /// rho0 / (4 pi) * sqrt(|Q|^2 + k^2 |D|^2 / 3) from its surface monopole Q and dipole D moments.
 ModalModel to_modal_model(const Soundbank& bank, const std::string& name);
 
