@@ -47,4 +47,22 @@ std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& r) {
   return std::make_unique<runtime::CpuFilterbank>(o);
 }
 
+std::shared_ptr<gpu::Context> transfer_device(const std::string& backend) {
+  if (backend == "cpu") return nullptr;
+  if (backend != "gpu" && backend != "auto")
+    throw InputError("--transfer-backend: unknown backend '" + backend + "' (auto, cpu, gpu)");
+  try {
+    auto ctx = std::make_shared<gpu::Context>();
+    const VkPhysicalDeviceType t = ctx->info().type;
+    if (backend == "auto" && t != VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU &&
+        t != VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU)
+      return nullptr;
+    return ctx;
+  } catch (const gpu::NoDeviceError& e) {
+    if (backend == "gpu")
+      std::fprintf(stderr, "warning: %s; transfer kernels run on the CPU instead\n", e.what());
+    return nullptr;
+  }
+}
+
 }  // namespace chladni::cli

@@ -6,6 +6,10 @@
 
 #include "chladni/runtime/filterbank.hpp"
 
+namespace chladni::gpu {
+class Context;
+}
+
 namespace chladni::cli {
 
 struct BackendRequest {
@@ -18,5 +22,10 @@ struct BackendRequest {
 };
 
 std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& request);
+
+/// Vulkan context for the transfer kernels: "gpu" (warns and returns null without a device),
+/// "cpu" (null) or "auto" (a discrete or integrated GPU when present, else null: on a CPU
+/// driver such as lavapipe the double-precision CPU kernels are as fast, see PERFORMANCE.md).
+std::shared_ptr<gpu::Context> transfer_device(const std::string& backend);
 
 }  // namespace chladni::cli

@@ -10,6 +10,7 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/precompute.hpp"
+#include "backend.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 
@@ -23,8 +24,11 @@ struct PrecomputeArgs {
   double max_tet_volume = 0;
   int order = 2, threads = 0;
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
-  std::string eigensolver = "block";
-  bool repair = false, quiet = false;
+  std::string eigensolver = "block", transfer_backend = "auto";
+  bool repair = false, quiet = false, no_transfer = false;
+  int transfer_order = 0;
+  std::size_t transfer_max_sources = 1024;
+  double sound_speed = 343.0, air_density = 1.204;
 };
 
 nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::PrecomputeReport& r,
@@ -70,6 +74,16 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
   nlohmann::json stages = nlohmann::json::object();
   for (const auto& s : r.stages) stages[s.name] = s.seconds;
   j["seconds"] = stages;
+  if (bank.transfer) {
+    const auto& t = r.transfer_times;
+    j["transfer"] = {{"kernels", r.transfer_kernels},
+                     {"modes", bank.transfer->mode_count()},
+                     {"coefficients", bank.transfer->coefficients.size()},
+                     {"poor_fits", r.poor_fits},
+                     {"max_held_out_error", r.max_held_out},
+                     {"thread_seconds",
+                      {{"matrices", t.matrix}, {"solve", t.solve}, {"expansion", t.expand}}}};
+  }
   j["total_seconds"] = r.total_seconds;
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
@@ -102,6 +116,14 @@ void run_precompute(const PrecomputeArgs& a) {
   o.max_tet_volume = a.max_tet_volume;
   o.threads = a.threads;
   o.mode_cap = std::max(a.mode_cap, a.max_modes);
+  o.transfer = !a.no_transfer;
+  o.acoustic.order = a.transfer_order;
+  o.acoustic.max_sources = a.transfer_max_sources;
+  o.acoustic.sound_speed = a.sound_speed;
+  o.acoustic.air_density = a.air_density;
+  o.acoustic.threads = a.threads;
+  o.acoustic.validate();
+  if (o.transfer) o.gpu = transfer_device(a.transfer_backend);
   if (a.eigensolver == "spectra")
     o.eigensolver = precompute::EigenOptions::Method::Spectra;
   else if (a.eigensolver != "block")
@@ -145,6 +167,13 @@ void run_precompute(const PrecomputeArgs& a) {
     for (std::size_t i = 0; i < std::min<std::size_t>(8, bank.omega.size()); ++i)
       std::printf(" %.1f", bank.omega[i] / (2 * std::numbers::pi));
     std::printf(" Hz\n");
+  }
+  if (bank.transfer) {
+    const auto& t = r.transfer_times;
+    std::printf("transfer (%s): %zu modes, %zu poor fits (held-out error > %.0f%%), max held-out "
+                "%.2g; thread-seconds: matrices %.2f, solve %.2f, expansion %.2f\n",
+                r.transfer_kernels.c_str(), bank.transfer->mode_count(), r.poor_fits,
+                100.0 * Transfer::kPoorFit, r.max_held_out, t.matrix, t.solve, t.expand);
   }
   std::printf("time:");
   for (const auto& s : r.stages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);
@@ -195,6 +224,21 @@ void add_precompute(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--json", a->json_path, "Write a JSON summary (stages, timings, modes)");
   cmd->add_flag("-q,--quiet", a->quiet, "No progress and no summary");
+  cmd->add_flag("--no-transfer", a->no_transfer,
+                "Skip acoustic transfer (listener gains then use a compact-source estimate)");
+  cmd->add_option("--transfer-order", a->transfer_order,
+                  "Multipole order L for every mode (0: per mode from k and the object's size)")
+      ->capture_default_str();
+  cmd->add_option("--transfer-max-sources", a->transfer_max_sources,
+                  "Most equivalent sources per mode")
+      ->capture_default_str();
+  cmd->add_option("--transfer-backend", a->transfer_backend,
+                  "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")
+      ->capture_default_str();
+  cmd->add_option("--sound-speed", a->sound_speed, "Speed of sound in air (m/s)")
+      ->capture_default_str();
+  cmd->add_option("--air-density", a->air_density, "Density of air (kg/m^3)")
+      ->capture_default_str();
   cmd->callback([a] { run_precompute(*a); });
 }
 

@@ -154,6 +154,22 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
       for (int k = 0; k < 3; ++k) bank.shapes.push_back(float(col(Eigen::Index(3 * v + k))));
   }
   r.eigen.vectors.resize(0, 0);
+
+  if (o.transfer) {
+    sw.start("transfer");
+    const RadiatingSurface rs(surface, o.acoustic);
+    std::unique_ptr<TransferKernels> kernels =
+        o.gpu ? make_gpu_transfer_kernels(o.gpu) : make_cpu_transfer_kernels(1);
+    r.transfer_kernels = kernels->name();
+    bank.transfer = compute_transfer(rs, bank, o.acoustic, *kernels, &r.transfer_times,
+                                     [&](std::size_t done, std::size_t total) {
+                                       if (p.fraction) p.fraction(double(done) / double(total));
+                                     });
+    for (std::size_t i = 0; i < bank.transfer->mode_count(); ++i) {
+      r.poor_fits += bank.transfer->poor(i);
+      r.max_held_out = std::max(r.max_held_out, double(bank.transfer->modes[i].held_out_error));
+    }
+  }
   sw.stop();
   r.total_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
@@ -172,6 +188,13 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   meta["modes_dropped"] = {
       {"overdamped", r.overdamped}, {"below_band", r.below_band}, {"above_band", r.above_band}};
   meta["repairs"] = r.repairs;
+  if (o.transfer) {
+    meta["transfer"] = {{"kernels", r.transfer_kernels},
+                        {"order", o.acoustic.order == 0 ? nlohmann::json("auto")
+                                                        : nlohmann::json(o.acoustic.order)},
+                        {"max_sources", o.acoustic.max_sources},
+                        {"poor_fits", r.poor_fits}};
+  }
   bank.metadata_json = meta.dump();
   bank.validate();
   return bank;

@@ -49,6 +49,7 @@ class CpuTransferKernels final : public TransferKernels {
   }
 
   std::string name() const override { return "cpu (double)"; }
+  bool thread_safe() const override { return true; }
 
  private:
   int threads_;

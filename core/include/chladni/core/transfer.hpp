@@ -27,7 +27,7 @@ struct ModeTransfer {
 
 struct Transfer {
   /// Fits whose held-out error exceeds this are flagged as poor (chladni info).
-  static constexpr float kPoorFit = 0.2f;
+  static constexpr float kPoorFit = 0.3f;
 
   Vec3 centre{0, 0, 0};        ///< expansion centre (m, object frame)
   double radius = 0;           ///< R (m)

@@ -34,6 +34,8 @@ struct AcousticOptions {
   std::size_t min_collocation = 1024;
   std::size_t held_out = 1000;   ///< surface points kept out of the fit to measure its error
   double regularization = 1e-6;  ///< Tikhonov weight on column-normalized sources
+  enum class Solver { Qr, Normal };
+  Solver solver = Solver::Qr;  ///< Householder QR of the stack, or the normal equations
   double truncation = 1e-3;      ///< drop the orders carrying less than this at r = 2R
   int threads = 0;               ///< modes fitted in parallel (0: all cores)
   void validate() const;         ///< throws InputError naming the bad field

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "chladni/core/soundbank.hpp"
+#include "chladni/precompute/acoustic_transfer.hpp"
 #include "chladni/precompute/eigensolve.hpp"
 #include "chladni/precompute/fem.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
@@ -29,6 +30,10 @@ struct PrecomputeOptions {
   int threads = 0;
   std::size_t mode_cap = 2000;
   EigenOptions::Method eigensolver = EigenOptions::Method::BlockLanczos;
+  bool transfer = true;  ///< fit acoustic transfer per mode (XFER)
+  AcousticOptions acoustic;
+  /// Vulkan device for the transfer kernels; null: the double-precision CPU kernels.
+  std::shared_ptr<gpu::Context> gpu;
 };
 
 struct StageTime {
@@ -45,6 +50,10 @@ struct PrecomputeReport {
   EigenResult eigen;  ///< vectors are released after use
   std::size_t computed = 0, overdamped = 0, below_band = 0, above_band = 0, kept = 0;
   double max_residual = 0;
+  std::string transfer_kernels;  ///< which kernels ran ("" without transfer)
+  TransferTimes transfer_times;  ///< summed over the threads that fitted modes
+  std::size_t poor_fits = 0;
+  double max_held_out = 0;
   std::vector<StageTime> stages;
   double total_seconds = 0;
 };

@@ -29,6 +29,8 @@ class TransferKernels {
                      std::span<const std::complex<double>> q, double k,
                      std::complex<double>* out) = 0;
   virtual std::string name() const = 0;
+  /// Whether calls from several threads at once are safe (the CPU kernels; not one GPU queue).
+  virtual bool thread_safe() const { return false; }
 };
 
 /// Double precision, threaded over columns (threads 0: all cores).
