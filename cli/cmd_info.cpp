@@ -91,10 +91,11 @@ void run_info(const InfoArgs& a) {
   if (b.transfer) {
     const Transfer& t = *b.transfer;
     for (std::size_t i = 0; i < t.mode_count(); ++i) poor += t.poor(i);
-    std::printf("transfer  multipole about (%.4g, %.4g, %.4g) m, R %.4g m, c %.4g m/s, rho0 %.4g "
-                "kg/m^3; %zu coefficients; %zu poor fits (held-out error > %.0f%%)\n",
-                t.centre[0], t.centre[1], t.centre[2], t.radius, t.sound_speed, t.air_density,
-                t.coefficients.size(), poor, 100.0 * Transfer::kPoorFit);
+    std::printf(
+        "transfer  multipole about (%.4g, %.4g, %.4g) m, R %.4g m, c %.4g m/s, rho0 %.4g "
+        "kg/m^3; %zu coefficients; %zu poor fits (held-out error > %.0f%%)\n",
+        t.centre[0], t.centre[1], t.centre[2], t.radius, t.sound_speed, t.air_density,
+        t.coefficients.size(), poor, 100.0 * Transfer::kPoorFit);
   } else {
     std::printf("transfer  none (listener gains use a compact-source estimate)\n");
   }
@@ -103,7 +104,8 @@ void run_info(const InfoArgs& a) {
       std::printf("meta      %s: %s\n", k.c_str(), v.dump().c_str());
   std::printf("%zu modes\n%6s %12s %12s %12s %10s %10s", b.mode_count(), "mode", "freq (Hz)",
               "decay (1/s)", "damp. ratio", "T60 (s)", "residual");
-  if (b.transfer) std::printf(" %5s %7s %9s %9s %9s", "order", "sources", "fit res.", "held-out", "expansion");
+  if (b.transfer)
+    std::printf(" %5s %7s %9s %9s %9s", "order", "sources", "fit res.", "held-out", "expansion");
   std::printf("\n");
   for (std::size_t i = 0; i < b.mode_count(); ++i) {
     const auto r = row(i);

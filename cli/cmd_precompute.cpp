@@ -8,9 +8,9 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
+#include "backend.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/precompute.hpp"
-#include "backend.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
 
@@ -76,13 +76,13 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
   j["seconds"] = stages;
   if (bank.transfer) {
     const auto& t = r.transfer_times;
-    j["transfer"] = {{"kernels", r.transfer_kernels},
-                     {"modes", bank.transfer->mode_count()},
-                     {"coefficients", bank.transfer->coefficients.size()},
-                     {"poor_fits", r.poor_fits},
-                     {"max_held_out_error", r.max_held_out},
-                     {"thread_seconds",
-                      {{"matrices", t.matrix}, {"solve", t.solve}, {"expansion", t.expand}}}};
+    j["transfer"] = {
+        {"kernels", r.transfer_kernels},
+        {"modes", bank.transfer->mode_count()},
+        {"coefficients", bank.transfer->coefficients.size()},
+        {"poor_fits", r.poor_fits},
+        {"max_held_out_error", r.max_held_out},
+        {"thread_seconds", {{"matrices", t.matrix}, {"solve", t.solve}, {"expansion", t.expand}}}};
   }
   j["total_seconds"] = r.total_seconds;
   rusage ru{};
@@ -170,10 +170,11 @@ void run_precompute(const PrecomputeArgs& a) {
   }
   if (bank.transfer) {
     const auto& t = r.transfer_times;
-    std::printf("transfer (%s): %zu modes, %zu poor fits (held-out error > %.0f%%), max held-out "
-                "%.2g; thread-seconds: matrices %.2f, solve %.2f, expansion %.2f\n",
-                r.transfer_kernels.c_str(), bank.transfer->mode_count(), r.poor_fits,
-                100.0 * Transfer::kPoorFit, r.max_held_out, t.matrix, t.solve, t.expand);
+    std::printf(
+        "transfer (%s): %zu modes, %zu poor fits (held-out error > %.0f%%), max held-out "
+        "%.2g; thread-seconds: matrices %.2f, solve %.2f, expansion %.2f\n",
+        r.transfer_kernels.c_str(), bank.transfer->mode_count(), r.poor_fits,
+        100.0 * Transfer::kPoorFit, r.max_held_out, t.matrix, t.solve, t.expand);
   }
   std::printf("time:");
   for (const auto& s : r.stages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);

@@ -10,5 +10,6 @@ void add_devices(CLI::App& app);
 void add_precompute(CLI::App& app);
 void add_materials(CLI::App& app);
 void add_info(CLI::App& app);
+void add_radiate(CLI::App& app);
 
 }  // namespace chladni::cli

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <cmath>
+#include <complex>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -119,11 +121,20 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
   j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["modes"].size(), 6u);
   EXPECT_EQ(j["material"]["name"], "steel");
+  ASSERT_TRUE(j["transfer"].is_object()) << j.dump();
+  EXPECT_GT(j["transfer"]["radius_m"].get<double>(), 0.15);
+  for (const auto& m : j["modes"]) {
+    EXPECT_GE(m["transfer"]["order"].get<int>(), 0);
+    EXPECT_GT(m["transfer"]["sources"].get<int>(), 0);
+    EXPECT_EQ(m["transfer"]["poor_fit"].get<bool>(),
+              m["transfer"]["held_out_error"].get<double>() > 0.3);
+  }
   const auto& m0 = j["modes"][0];
   EXPECT_NEAR(m0["t60_s"].get<double>() * m0["decay_per_s"].get<double>(), std::log(1000.0), 1e-9);
   r = run("info " + bank);
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.output.find("T60 (s)"), std::string::npos);
+  EXPECT_NE(r.output.find("held-out"), std::string::npos);
 
   const std::string scene = chladni::test::write_temp("chladni_cli_bank_scene.json", R"({
     "objects": [{"name": "bar", "soundbank": ")" + bank + R"("}],
@@ -143,12 +154,12 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
     std::ifstream f(bank, std::ios::binary);
     bytes.assign(std::istreambuf_iterator<char>(f), {});
   }
-  bytes[bytes.size() - 9] ^= 0x40;  // inside the last section (SHAP)
+  bytes[bytes.size() - 9] ^= 0x40;  // inside the last section (XFER)
   const std::string bad = chladni::test::temp_path("chladni_cli_bad.chbank");
   std::ofstream(bad, std::ios::binary).write(bytes.data(), std::streamsize(bytes.size()));
   r = run("info " + bad);
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find("section 'SHAP' checksum mismatch"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("section 'XFER' checksum mismatch"), std::string::npos) << r.output;
 }
 
 TEST(CliPrecompute, BrokenMeshesExitWith2AndRepairGoesThrough) {
@@ -195,4 +206,75 @@ TEST(CliPrecompute, BadArgumentsNameTheProblem) {
   r = run("materials");
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.output.find("sl2016-porcelain:caughey"), std::string::npos);
+}
+
+TEST(CliPrecompute, NoTransferLeavesXferOut) {
+  const std::string bank = chladni::test::temp_path("chladni_cli_bar_nox.chbank");
+  Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank +
+                 " --max-modes 2 --max-tet-volume 1e-6 --no-transfer -q");
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = run("info " + bank + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_TRUE(nlohmann::json::parse(r.output)["transfer"].is_null());
+}
+
+// radiate on the bundled sphere: the JSON pressures against the exact solution
+// p = i rho0 c U h_l(kr) / h_l'(ka) P_l(cos t), via the sources and via the multipole series.
+TEST(CliRadiate, SphereHarmonicMatchesTheExactSolution) {
+  const std::string pts = chladni::test::write_temp("chladni_radiate_pts.txt",
+                                                    "# x y z\n0 0 0.25\n0.2 0.1 -0.3\n0.5 0 0.1\n");
+  const std::string json = chladni::test::temp_path("chladni_radiate.json");
+  const double a = 0.1, f = 900, c = 343.0, rho = 1.204, k = 2 * M_PI * f / c;
+  for (const char* via : {"sources", "multipole"}) {
+    const Result r = run("radiate " CHLADNI_SOURCE_DIR
+                         "/meshes/sphere.obj --freq 900 --pattern "
+                         "sphere-harmonic:l=2,m=0 --points " +
+                         pts + " --json " + json + " --via " + via);
+    ASSERT_EQ(r.code, 0) << r.output;
+    const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+    ASSERT_EQ(j["points"].size(), 3u);
+    for (const auto& p : j["points"]) {
+      const double x = p["x"], y = p["y"], z = p["z"];
+      const double r0 = std::sqrt(x * x + y * y + z * z), ct = z / r0;
+      const std::complex<double> h =
+          std::sph_bessel(2, k * r0) + std::complex<double>(0, 1) * std::sph_neumann(2, k * r0);
+      // h_2'(x) = h_1(x) - 3/x h_2(x)
+      const double ka = k * a;
+      const std::complex<double> h1a =
+          std::sph_bessel(1, ka) + std::complex<double>(0, 1) * std::sph_neumann(1, ka);
+      const std::complex<double> h2a =
+          std::sph_bessel(2, ka) + std::complex<double>(0, 1) * std::sph_neumann(2, ka);
+      const std::complex<double> exact =
+          std::complex<double>(0, rho * c) * h / (h1a - 3.0 / ka * h2a) * std::legendre(2, ct);
+      const std::complex<double> got(p["pressure"]["re"].get<double>(),
+                                     p["pressure"]["im"].get<double>());
+      EXPECT_LT(std::abs(got - exact), 0.02 * std::abs(exact))
+          << via << " at " << x << " " << y << " " << z;
+    }
+  }
+}
+
+TEST(CliRadiate, BadInputNamesFileAndLine) {
+  const std::string sphere = CHLADNI_SOURCE_DIR "/meshes/sphere.obj";
+  const std::string pts =
+      chladni::test::write_temp("chladni_radiate_bad_pts.txt", "0 0 1\n0 nan 2\n");
+  Result r = run("radiate " + sphere + " --freq 500 --pattern uniform --points " + pts);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("chladni_radiate_bad_pts.txt:2: 'nan' is not a finite number"),
+            std::string::npos)
+      << r.output;
+  const std::string good = chladni::test::write_temp("chladni_radiate_good_pts.txt", "0 0 1\n");
+  const std::string vel = chladni::test::write_temp("chladni_radiate_vel.txt", "1\n0.5 0.25\n");
+  r = run("radiate " + sphere + " --freq 500 --velocity " + vel + " --points " + good);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("2 velocity values, but"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("has 2562 vertices"), std::string::npos) << r.output;
+  r = run("radiate " + sphere + " --freq 500 --pattern sphere-harmonic:l=2,m=5 --points " + good);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("|m| <= l"), std::string::npos) << r.output;
+  r = run("radiate " CHLADNI_SOURCE_DIR
+          "/meshes/broken/elephant_with_holes.obj --freq 500 --pattern uniform --points " +
+          good);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("boundary edges"), std::string::npos) << r.output;
 }

@@ -33,7 +33,8 @@ Soundbank small_bank() {
     m.wavenumber = b.omega[i] / t.sound_speed;
     m.order = i + 1;
     m.sources = 130 + i;
-    m.fit_residual = 0.01f * float(i + 1), m.held_out_error = 0.6f * float(i), m.expansion_error = 1e-4f;
+    m.fit_residual = 0.01f * float(i + 1), m.held_out_error = 0.6f * float(i),
+    m.expansion_error = 1e-4f;
     std::vector<std::complex<double>> a((i + 2) * (i + 2));
     for (std::size_t k = 0; k < a.size(); ++k) a[k] = {0.5 * double(k), -1.0 / double(k + 1)};
     t.add_mode(m, a);

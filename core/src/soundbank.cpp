@@ -374,7 +374,8 @@ Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& 
       m.fit_residual = r.le<float>(), m.held_out_error = r.le<float>();
       m.expansion_error = r.le<float>();
       r.le<uint32_t>();
-      if (m.order > 200) r.fail("mode " + std::to_string(i) + " has order " + std::to_string(m.order));
+      if (m.order > 200)
+        r.fail("mode " + std::to_string(i) + " has order " + std::to_string(m.order));
       m.offset = total;
       total += uint64_t(m.order + 1) * (m.order + 1);
       t.modes.push_back(m);

@@ -368,7 +368,8 @@ struct SourceFitter {
         G.diagonal().array() += o.regularization * o.regularization;
         const Eigen::LLT<Eigen::MatrixXcd> llt(G);
         if (llt.info() != Eigen::Success)
-          throw InternalError("transfer: the regularized normal equations are not positive definite");
+          throw InternalError(
+              "transfer: the regularized normal equations are not positive definite");
         x = llt.solve(B.adjoint() * wb);
       }
       const Eigen::VectorXcd q = d.cwiseInverse().asDiagonal() * x;

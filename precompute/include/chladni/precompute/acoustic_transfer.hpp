@@ -36,9 +36,9 @@ struct AcousticOptions {
   double regularization = 1e-6;  ///< Tikhonov weight on column-normalized sources
   enum class Solver { Qr, Normal };
   Solver solver = Solver::Qr;  ///< Householder QR of the stack, or the normal equations
-  double truncation = 1e-3;      ///< drop the orders carrying less than this at r = 2R
-  int threads = 0;               ///< modes fitted in parallel (0: all cores)
-  void validate() const;         ///< throws InputError naming the bad field
+  double truncation = 1e-3;    ///< drop the orders carrying less than this at r = 2R
+  int threads = 0;             ///< modes fitted in parallel (0: all cores)
+  void validate() const;       ///< throws InputError naming the bad field
 };
 
 /// Normal velocity (m/s, complex amplitude) at barycentric point `b` of triangle `t`.

@@ -1,0 +1,233 @@
+// chladni radiate MESH --freq HZ --velocity FILE|--pattern NAME --points FILE: the pressure a
+// closed surface radiates for a prescribed normal velocity, by the same equivalent-source fit
+// (and, with --via multipole, the same re-expansion) that precompute stores as transfer.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
+
+#include "backend.hpp"
+#include "chladni/core/error.hpp"
+#include "chladni/core/spherical.hpp"
+#include "chladni/core/transfer.hpp"
+#include "chladni/gpu/context.hpp"
+#include "chladni/precompute/acoustic_transfer.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+#include "commands.hpp"
+
+namespace chladni::cli {
+namespace {
+
+using cd = std::complex<double>;
+
+struct RadiateArgs {
+  std::string mesh, velocity, pattern, points, backend = "cpu", json_path, unit = "m",
+                                               via = "sources";
+  double freq = 0, scale = 1, sound_speed = 343.0, air_density = 1.204;
+  int order = 0;
+};
+
+// Numbers per non-empty, non-comment line; errors name file and line.
+std::vector<std::vector<double>> read_rows(const std::string& path, std::size_t min_cols,
+                                           std::size_t max_cols, const char* what) {
+  std::ifstream in(path);
+  if (!in) throw InputError("cannot open " + std::string(what) + " file " + path);
+  std::vector<std::vector<double>> rows;
+  std::string line;
+  for (std::size_t n = 1; std::getline(in, line); ++n) {
+    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
+    std::istringstream ss(line);
+    std::vector<double> row;
+    std::string tok;
+    while (ss >> tok) {
+      char* end = nullptr;
+      const double v = std::strtod(tok.c_str(), &end);
+      if (end == tok.c_str() || *end != '\0' || !std::isfinite(v))
+        throw InputError(path + ":" + std::to_string(n) + ": '" + tok + "' is not a finite number");
+      row.push_back(v);
+    }
+    if (row.empty()) continue;
+    if (row.size() < min_cols || row.size() > max_cols)
+      throw InputError(path + ":" + std::to_string(n) + ": expected " +
+                       (min_cols == max_cols
+                            ? std::to_string(min_cols)
+                            : std::to_string(min_cols) + " or " + std::to_string(max_cols)) +
+                       " numbers, found " + std::to_string(row.size()));
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+// "sphere-harmonic:l=2,m=0[,U=1]" or "uniform[:U=1]": values per vertex about the centroid.
+std::vector<cd> pattern_velocity(const std::string& spec, const precompute::SurfaceMesh& mesh) {
+  const auto colon = spec.find(':');
+  const std::string name = spec.substr(0, colon);
+  std::map<std::string, double> params{{"l", 0}, {"m", 0}, {"U", 1}};
+  if (colon != std::string::npos) {
+    std::stringstream ss(spec.substr(colon + 1));
+    std::string kv;
+    while (std::getline(ss, kv, ',')) {
+      const auto eq = kv.find('=');
+      char* end = nullptr;
+      const double v = eq == std::string::npos ? NAN : std::strtod(kv.c_str() + eq + 1, &end);
+      if (eq == std::string::npos || !params.count(kv.substr(0, eq)) || *end != '\0' ||
+          !std::isfinite(v))
+        throw InputError("--pattern: bad parameter '" + kv + "' (l=INT, m=INT, U=NUMBER)");
+      params[kv.substr(0, eq)] = v;
+    }
+  }
+  const int l = int(params["l"]), m = int(params["m"]);
+  if (name != "sphere-harmonic" && name != "uniform")
+    throw InputError("--pattern: unknown pattern '" + name + "' (sphere-harmonic, uniform)");
+  if (l != params["l"] || m != params["m"] || l < 0 || l > 40 || std::abs(m) > l)
+    throw InputError("--pattern: need integers 0 <= l <= 40 and |m| <= l");
+  // Area-weighted centroid of the surface.
+  Vec3 c{0, 0, 0};
+  double area = 0;
+  for (const auto& t : mesh.triangles) {
+    const Vec3 n = triangle_normal(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+    const double a = 0.5 * std::sqrt(dot(n, n));
+    for (int k = 0; k < 3; ++k)
+      c[k] += a * (mesh.vertices[t[0]][k] + mesh.vertices[t[1]][k] + mesh.vertices[t[2]][k]) / 3;
+    area += a;
+  }
+  for (double& x : c) x /= area;
+  std::vector<cd> out(mesh.vertices.size());
+  for (std::size_t v = 0; v < out.size(); ++v) {
+    if (name == "uniform") {
+      out[v] = params["U"];
+      continue;
+    }
+    const Vec3 d = sub(mesh.vertices[v], c);
+    const double r = std::sqrt(dot(d, d));
+    const double theta = r > 0 ? std::acos(std::clamp(d[2] / r, -1.0, 1.0)) : 0.0;
+    const double phi = std::atan2(d[1], d[0]);
+    // U P_l^|m|(cos t) {cos, sin}(|m| p), without the Condon-Shortley phase.
+    const double p = std::assoc_legendre(unsigned(l), unsigned(std::abs(m)), std::cos(theta));
+    out[v] = params["U"] * p * (m >= 0 ? std::cos(m * phi) : std::sin(-m * phi));
+  }
+  return out;
+}
+
+void run_radiate(const RadiateArgs& a) {
+  if (!(a.freq > 0) || !std::isfinite(a.freq)) throw InputError("--freq must be finite and > 0");
+  if (a.velocity.empty() == a.pattern.empty())
+    throw InputError("give exactly one of --velocity FILE and --pattern NAME");
+  if (a.via != "sources" && a.via != "multipole")
+    throw InputError("--via must be sources or multipole");
+  const precompute::SurfaceMesh mesh =
+      precompute::read_mesh(a.mesh, precompute::unit_scale(a.unit) * a.scale);
+  precompute::require_valid(precompute::check_mesh(mesh), a.mesh, false);
+
+  std::vector<cd> un;
+  if (!a.pattern.empty()) {
+    un = pattern_velocity(a.pattern, mesh);
+  } else {
+    for (const auto& row : read_rows(a.velocity, 1, 2, "velocity"))
+      un.emplace_back(row[0], row.size() > 1 ? row[1] : 0.0);
+    if (un.size() != mesh.vertices.size())
+      throw InputError(a.velocity + ": " + std::to_string(un.size()) + " velocity values, but " +
+                       a.mesh + " has " + std::to_string(mesh.vertices.size()) + " vertices");
+  }
+  std::vector<Vec3> pts;
+  for (const auto& row : read_rows(a.points, 3, 3, "points"))
+    pts.push_back({row[0], row[1], row[2]});
+  if (pts.empty()) throw InputError(a.points + ": no points");
+
+  precompute::AcousticOptions o;
+  o.sound_speed = a.sound_speed;
+  o.air_density = a.air_density;
+  o.order = a.order;
+  const precompute::RadiatingSurface surf(mesh, o);
+  std::shared_ptr<gpu::Context> ctx = a.backend == "gpu" ? transfer_device("gpu") : nullptr;
+  if (a.backend != "gpu" && a.backend != "cpu") throw InputError("--backend must be cpu or gpu");
+  std::unique_ptr<precompute::TransferKernels> kernels =
+      ctx ? precompute::make_gpu_transfer_kernels(ctx) : precompute::make_cpu_transfer_kernels();
+  const double k = 2 * std::numbers::pi * a.freq / o.sound_speed;
+  const precompute::SourceFit fit =
+      precompute::fit_sources(surf, k, surf.from_vertex_values(un), o, *kernels);
+  std::vector<cd> a_lm;
+  const ModeTransfer mt = precompute::expand_sources(surf, fit, o, *kernels, a_lm);
+  std::vector<cd> p;
+  if (a.via == "sources") {
+    p = precompute::source_pressure(surf, fit, pts, *kernels);
+  } else {
+    Transfer t;
+    t.centre = surf.centre();
+    t.radius = surf.radius();
+    t.add_mode(mt, a_lm);
+    for (const Vec3& x : pts) p.push_back(t.pressure(0, x));
+  }
+
+  nlohmann::json j;
+  j["mesh"] = a.mesh;
+  j["frequency_hz"] = a.freq;
+  j["wavenumber"] = k;
+  j["kernels"] = kernels->name();
+  j["via"] = a.via;
+  j["fit"] = {{"sources", fit.sources.size()},
+              {"fit_residual", fit.residual},
+              {"held_out_error", fit.held_out},
+              {"order", mt.order},
+              {"expansion_error", mt.expansion_error},
+              {"centre", surf.centre()},
+              {"radius_m", surf.radius()}};
+  nlohmann::json out = nlohmann::json::array();
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    out.push_back({{"x", pts[i][0]},
+                   {"y", pts[i][1]},
+                   {"z", pts[i][2]},
+                   {"pressure", {{"re", p[i].real()}, {"im", p[i].imag()}}}});
+  j["points"] = out;
+  if (!a.json_path.empty()) {
+    std::ofstream f(a.json_path);
+    if (!f) throw InputError("cannot write " + a.json_path);
+    f << j.dump(2) << '\n';
+  }
+  std::printf(
+      "%s at %.6g Hz (ka %.3g) with %s: %zu sources, fit residual %.2e, held-out %.2e, "
+      "order %u, expansion error %.2e\n",
+      a.mesh.c_str(), a.freq, k * surf.radius(), kernels->name().c_str(), fit.sources.size(),
+      fit.residual, fit.held_out, mt.order, mt.expansion_error);
+  std::printf("%12s %12s %12s %14s %14s %12s\n", "x", "y", "z", "re p (Pa)", "im p (Pa)",
+              "|p| (Pa)");
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    std::printf("%12.5g %12.5g %12.5g %14.6g %14.6g %12.6g\n", pts[i][0], pts[i][1], pts[i][2],
+                p[i].real(), p[i].imag(), std::abs(p[i]));
+}
+
+}  // namespace
+
+void add_radiate(CLI::App& app) {
+  auto a = std::make_shared<RadiateArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "radiate", "Pressure radiated by a closed surface for a prescribed normal velocity");
+  cmd->add_option("mesh", a->mesh, "Closed triangle mesh (OBJ/OFF/PLY/STL)")->required();
+  cmd->add_option("--freq", a->freq, "Frequency (Hz)")->required();
+  cmd->add_option("--velocity", a->velocity,
+                  "Outward normal velocity per vertex, one line each: 're' or 're im' (m/s)");
+  cmd->add_option("--pattern", a->pattern,
+                  "Analytic velocity: sphere-harmonic:l=L,m=M[,U=1] (U P_l^m(cos t) about the "
+                  "surface centroid) or uniform[:U=1]");
+  cmd->add_option("--points", a->points, "Field points, one 'x y z' per line (m)")->required();
+  cmd->add_option("--backend", a->backend, "Kernels: cpu (double) or gpu (Vulkan, float)")
+      ->capture_default_str();
+  cmd->add_option("--via", a->via,
+                  "Evaluate by the fitted sources, or by the stored multipole series (r >= R)")
+      ->capture_default_str();
+  cmd->add_option("--order", a->order, "Multipole order (0: automatic)")->capture_default_str();
+  cmd->add_option("--unit", a->unit, "Unit of the mesh coordinates: m, cm, mm")
+      ->capture_default_str();
+  cmd->add_option("--scale", a->scale, "Extra factor on the coordinates")->capture_default_str();
+  cmd->add_option("--sound-speed", a->sound_speed, "m/s")->capture_default_str();
+  cmd->add_option("--air-density", a->air_density, "kg/m^3")->capture_default_str();
+  cmd->add_option("--json", a->json_path, "Write the fit and the pressures as JSON");
+  cmd->callback([a] { run_radiate(*a); });
+}
+
+}  // namespace chladni::cli
