@@ -1,0 +1,84 @@
+#pragma once
+// Listener gains from acoustic transfer (core/transfer.hpp): for every mode of every object,
+// |p_i(listener)| per unit modal amplitude, recomputed whenever the listener or an object moves.
+// The modes of many objects are flattened into one table (single precision); a CPU path
+// (threaded, allocation-free per update) and a Vulkan kernel (kernels/xfer_gains.comp) evaluate
+// the same series: p = sum_l [h_l(kr) / h_l(kR)] sum_m a_lm Y_lm(x^), with r clamped to >= R.
+#include <complex>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "chladni/core/transfer.hpp"
+#include "chladni/core/vec3.hpp"
+
+namespace chladni::gpu {
+class Buffer;
+class Context;
+class Pipeline;
+class Sequence;
+}  // namespace chladni::gpu
+
+namespace chladni::runtime {
+
+class ThreadPool;
+
+struct TransferTable {
+  struct Mode {
+    float k;          ///< wavenumber (rad/m)
+    uint32_t order;   ///< L
+    uint32_t offset;  ///< first coefficient
+    uint32_t object;
+  };
+  struct Object {
+    Vec3 centre{0, 0, 0};
+    double radius = 0;
+    uint32_t max_order = 0;
+    uint32_t first_mode = 0, mode_count = 0;
+    uint32_t y_offset = 0;  ///< first Y_lm of this object in the per-update harmonics table
+  };
+  std::vector<Mode> modes;
+  std::vector<std::complex<float>> coefficients;
+  std::vector<Object> objects;
+  uint32_t y_count = 0;  ///< harmonics per update, summed over objects
+
+  /// Appends an object's modes; returns the object's index.
+  uint32_t add(const Transfer& t);
+  std::size_t mode_count() const { return modes.size(); }
+};
+
+/// Per-update scratch: each object's clamped distance and its harmonics Y_lm(listener direction).
+struct ListenerFrame {
+  std::vector<float> r;  ///< per object
+  std::vector<float> y;  ///< TransferTable::y_count
+  std::vector<double> scratch;
+  /// Fills r and y from the listener's position in each object's frame (no allocation once sized).
+  void update(const TransferTable& table, std::span<const Vec3> listener_in_object);
+};
+
+/// CPU evaluation: out[i] = |p_i| for every mode of the table. Allocation-free; spreads the modes
+/// over `pool` when given.
+void transfer_gains(const TransferTable& table, const ListenerFrame& frame, std::span<float> out,
+                    ThreadPool* pool = nullptr);
+
+/// The same on a Vulkan device: coefficients stay on the device; an update uploads r and Y
+/// (kilobytes) and reads back one float per mode.
+class GpuTransferGains {
+ public:
+  GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const TransferTable& table);
+  ~GpuTransferGains();
+  void compute(const ListenerFrame& frame, std::span<float> out);
+  /// Device time of the last compute() (0 without timestamps).
+  double last_device_ms() const { return device_ms_; }
+
+ private:
+  std::shared_ptr<gpu::Context> ctx_;
+  uint32_t modes_ = 0, y_count_ = 0, objects_ = 0;
+  std::unique_ptr<gpu::Buffer> mode_buf_, coeff_buf_, object_buf_, y_buf_, out_buf_;
+  std::unique_ptr<gpu::Pipeline> pipeline_;
+  std::unique_ptr<gpu::Sequence> seq_;
+  double device_ms_ = 0;
+};
+
+}  // namespace chladni::runtime

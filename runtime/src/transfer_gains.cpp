@@ -1,0 +1,204 @@
+#include "chladni/runtime/transfer_gains.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "chladni/core/error.hpp"
+#include "chladni/core/spherical.hpp"
+#include "chladni/gpu/buffer.hpp"
+#include "chladni/gpu/context.hpp"
+#include "chladni/gpu/pipeline.hpp"
+#include "chladni/gpu/sequence.hpp"
+#include "chladni/kernels/xfer_gains.spv.h"
+#include "chladni/runtime/thread_pool.hpp"
+
+namespace chladni::runtime {
+namespace {
+
+constexpr uint32_t kLocal = 64;  // local_size_x of xfer_gains.comp
+constexpr int kModesPerTask = 2048;
+
+// |sum_l [h_l(x) / h_l(x0)] sum_m a_lm Y_lm| with h_l = e^(ix) g_l(x) (the common phase drops out
+// of the magnitude); g_l(x) = polynomial in 1/x by the upward recurrence, both sequences rescaled
+// together so orders whose g_l(x0) alone would overflow float still contribute their tiny share.
+float mode_gain(const TransferTable::Mode& m, const std::complex<float>* a, const float* y, float r,
+                float radius) {
+  const float x = m.k * r, x0 = m.k * radius;
+  std::complex<float> g0(0.0f, -1.0f / x), g1(-1.0f / x, -1.0f / (x * x));
+  std::complex<float> h0(0.0f, -1.0f / x0), h1(-1.0f / x0, -1.0f / (x0 * x0));
+  std::complex<float> p(0.0f, 0.0f);
+  const int L = static_cast<int>(m.order);
+  for (int l = 0; l <= L; ++l) {
+    if (l >= 2) {
+      const float f = float(2 * l - 1);
+      const std::complex<float> g2 = (f / x) * g1 - g0, h2 = (f / x0) * h1 - h0;
+      g0 = g1, g1 = g2, h0 = h1, h1 = h2;
+      if (std::abs(h1.real()) + std::abs(h1.imag()) > 1e15f)
+        g0 *= 1e-15f, g1 *= 1e-15f, h0 *= 1e-15f, h1 *= 1e-15f;
+    }
+    const std::complex<float> ratio = l == 0 ? g0 / h0 : g1 / h1;
+    float sr = 0.0f, si = 0.0f;
+    const std::size_t base = std::size_t(l) * std::size_t(l);
+    for (int k = 0; k <= 2 * l; ++k) {
+      sr += a[base + k].real() * y[base + k];
+      si += a[base + k].imag() * y[base + k];
+    }
+    p += ratio * std::complex<float>(sr, si);
+  }
+  return std::abs(p);
+}
+
+struct CpuTask {
+  const TransferTable* table;
+  const ListenerFrame* frame;
+  float* out;
+};
+
+void cpu_task(void* ctx, int index) {
+  const auto& c = *static_cast<const CpuTask*>(ctx);
+  const std::size_t b = std::size_t(index) * kModesPerTask;
+  const std::size_t e = std::min(c.table->modes.size(), b + kModesPerTask);
+  for (std::size_t i = b; i < e; ++i) {
+    const TransferTable::Mode& m = c.table->modes[i];
+    const TransferTable::Object& o = c.table->objects[m.object];
+    c.out[i] = mode_gain(m, c.table->coefficients.data() + m.offset, c.frame->y.data() + o.y_offset,
+                         c.frame->r[m.object], float(o.radius));
+  }
+}
+
+struct GpuMode {
+  float k;
+  uint32_t order, offset, object;
+};
+struct GpuObject {
+  float r, radius;
+  uint32_t y_offset, pad;
+};
+struct Push {
+  uint32_t mode_count;
+};
+
+}  // namespace
+
+uint32_t TransferTable::add(const Transfer& t) {
+  t.validate();
+  Object o;
+  o.centre = t.centre;
+  o.radius = t.radius;
+  o.first_mode = static_cast<uint32_t>(modes.size());
+  o.mode_count = static_cast<uint32_t>(t.mode_count());
+  o.y_offset = y_count;
+  const uint32_t index = static_cast<uint32_t>(objects.size());
+  for (std::size_t i = 0; i < t.mode_count(); ++i) {
+    const ModeTransfer& mt = t.modes[i];
+    const std::size_t n = sh_count(static_cast<int>(mt.order));
+    if (coefficients.size() + n > UINT32_MAX)
+      throw InputError("transfer table: too many coefficients");
+    modes.push_back({static_cast<float>(mt.wavenumber), mt.order,
+                     static_cast<uint32_t>(coefficients.size()), index});
+    const std::complex<float>* a = t.coefficients_of(i);
+    coefficients.insert(coefficients.end(), a, a + n);
+    o.max_order = std::max(o.max_order, mt.order);
+  }
+  y_count += static_cast<uint32_t>(sh_count(static_cast<int>(o.max_order)));
+  objects.push_back(o);
+  return index;
+}
+
+void ListenerFrame::update(const TransferTable& table, std::span<const Vec3> listener) {
+  if (listener.size() != table.objects.size())
+    throw std::invalid_argument("listener frame: one position per object is required");
+  r.resize(table.objects.size());
+  y.resize(table.y_count);
+  uint32_t top = 0;
+  for (const auto& ob : table.objects) top = std::max(top, ob.max_order);
+  scratch.resize(sh_count(static_cast<int>(top)));
+  double* yd = scratch.data();
+  for (std::size_t o = 0; o < table.objects.size(); ++o) {
+    const TransferTable::Object& ob = table.objects[o];
+    const Vec3 d = sub(listener[o], ob.centre);
+    r[o] = static_cast<float>(std::max(std::sqrt(dot(d, d)), ob.radius));
+    real_sh(static_cast<int>(ob.max_order), d, yd);
+    for (std::size_t k = 0; k < sh_count(static_cast<int>(ob.max_order)); ++k)
+      y[ob.y_offset + k] = static_cast<float>(yd[k]);
+  }
+}
+
+void transfer_gains(const TransferTable& table, const ListenerFrame& frame, std::span<float> out,
+                    ThreadPool* pool) {
+  if (out.size() < table.modes.size())
+    throw std::invalid_argument("transfer gains: output too short");
+  CpuTask task{&table, &frame, out.data()};
+  const int tasks = static_cast<int>((table.modes.size() + kModesPerTask - 1) / kModesPerTask);
+  if (pool)
+    pool->run(cpu_task, &task, tasks);
+  else
+    for (int i = 0; i < tasks; ++i) cpu_task(&task, i);
+}
+
+GpuTransferGains::GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const TransferTable& t)
+    : ctx_(std::move(ctx)),
+      modes_(static_cast<uint32_t>(t.modes.size())),
+      y_count_(t.y_count),
+      objects_(static_cast<uint32_t>(t.objects.size())) {
+  if (!ctx_) throw std::invalid_argument("GpuTransferGains needs a Vulkan context");
+  if ((uint64_t(modes_) + kLocal - 1) / kLocal > ctx_->limits().maxComputeWorkGroupCount[0])
+    throw gpu::Error("transfer gains: too many modes for one dispatch");
+  auto device = [&](std::size_t bytes) {
+    if (bytes > ctx_->limits().maxStorageBufferRange)
+      throw gpu::Error("transfer gains: table exceeds the device's storage buffer range");
+    return std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(bytes, 16),
+                                         gpu::Memory::DeviceLocal);
+  };
+  std::vector<GpuMode> modes(t.modes.size());
+  for (std::size_t i = 0; i < modes.size(); ++i)
+    modes[i] = {t.modes[i].k, t.modes[i].order, t.modes[i].offset, t.modes[i].object};
+  mode_buf_ = device(modes.size() * sizeof(GpuMode));
+  if (!modes.empty()) mode_buf_->upload(modes.data(), modes.size() * sizeof(GpuMode));
+  coeff_buf_ = device(t.coefficients.size() * sizeof(std::complex<float>));
+  if (!t.coefficients.empty())
+    coeff_buf_->upload(t.coefficients.data(), t.coefficients.size() * sizeof(std::complex<float>));
+  // Per-update inputs and the result are host-visible: small, written and read every update.
+  object_buf_ = std::make_unique<gpu::Buffer>(
+      *ctx_, std::max<std::size_t>(objects_ * sizeof(GpuObject), 16), gpu::Memory::HostVisible);
+  y_buf_ = std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(y_count_ * sizeof(float), 16),
+                                         gpu::Memory::HostVisible);
+  out_buf_ = std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(modes_ * sizeof(float), 16),
+                                           gpu::Memory::HostVisible);
+  std::vector<GpuObject> objs(objects_);
+  for (uint32_t o = 0; o < objects_; ++o)
+    objs[o] = {0.0f, float(t.objects[o].radius), t.objects[o].y_offset, 0u};
+  std::copy(objs.begin(), objs.end(), static_cast<GpuObject*>(object_buf_->data()));
+  pipeline_ = std::make_unique<gpu::Pipeline>(*ctx_, k_xfer_gains_spv, 5, sizeof(Push));
+  pipeline_->bind(0, *mode_buf_);
+  pipeline_->bind(1, *coeff_buf_);
+  pipeline_->bind(2, *object_buf_);
+  pipeline_->bind(3, *y_buf_);
+  pipeline_->bind(4, *out_buf_);
+  seq_ = std::make_unique<gpu::Sequence>(*ctx_, 2);
+}
+
+GpuTransferGains::~GpuTransferGains() = default;
+
+void GpuTransferGains::compute(const ListenerFrame& frame, std::span<float> out) {
+  if (out.size() < modes_) throw std::invalid_argument("transfer gains: output too short");
+  if (frame.r.size() != objects_ || frame.y.size() != y_count_)
+    throw std::invalid_argument("transfer gains: frame does not match the table");
+  if (modes_ == 0) return;
+  auto* objs = static_cast<GpuObject*>(object_buf_->data());
+  for (uint32_t o = 0; o < objects_; ++o) objs[o].r = frame.r[o];
+  std::copy(frame.y.begin(), frame.y.end(), static_cast<float*>(y_buf_->data()));
+  const Push push{modes_};
+  seq_->begin();
+  seq_->timestamp(0);
+  seq_->dispatch(*pipeline_, (modes_ + kLocal - 1) / kLocal, &push, sizeof push);
+  seq_->timestamp(1);
+  seq_->barrier();
+  seq_->run();
+  device_ms_ = seq_->elapsed_ns(0, 1) * 1e-6;
+  const float* src = static_cast<const float*>(out_buf_->data());
+  std::copy(src, src + modes_, out.begin());
+}
+
+}  // namespace chladni::runtime
