@@ -9,6 +9,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/core/soundbank.hpp"
+#include "chladni/gpu/context.hpp"
 #include "chladni/precompute/analytic_bar.hpp"
 #include "chladni/runtime/render.hpp"
 #include "commands.hpp"
@@ -129,6 +130,15 @@ void run_render(const RenderArgs& a) {
   ro.block = a.block;
   ro.synth.retire_db = a.retire_db;
   ro.synth.max_modes = req.capacity;
+  std::size_t transfer_modes = 0;
+  for (const auto& o : objects) transfer_modes += o.transfer ? o.modes.size() : 0;
+  if (a.backend == "gpu" && transfer_modes >= ro.gpu_gain_modes) {
+    try {
+      ro.gain_device = std::make_shared<gpu::Context>();
+    } catch (const gpu::NoDeviceError&) {
+      // the filterbank already warned; gains stay on the CPU
+    }
+  }
   runtime::RenderReport rep;
   AudioBuffer audio = runtime::render_scene(scene, objects, *fb, ro, &rep);
 
@@ -150,6 +160,10 @@ void run_render(const RenderArgs& a) {
         std::isnan(a.normalize_db) ? " Pa" : " Pa before normalization", rep.max_active_modes,
         static_cast<unsigned long long>(rep.stats.retired),
         static_cast<unsigned long long>(rep.stats.stolen));
+    if (!rep.gain_backend.empty())
+      std::printf("listener gains from transfer (%s): %llu updates, %.3f ms each\n",
+                  rep.gain_backend.c_str(), static_cast<unsigned long long>(rep.gain_updates),
+                  rep.gain_updates ? 1e3 * rep.gain_seconds / double(rep.gain_updates) : 0.0);
     std::printf("wrote %s\n", a.output.c_str());
   }
   if (std::isnan(a.normalize_db) && rep.peak > 1.0 && format != SampleFormat::Float32) {

@@ -127,3 +127,44 @@ TEST(Scene, ResolvesSoundbankPathsAgainstTheSceneFolder) {
   const Scene s = parse_scene(j, "/data/scenes");
   EXPECT_EQ(s.objects[1].soundbank, "/data/scenes/banks/cup.chbank");
 }
+
+TEST(Scene, OrientationAndMoveEvents) {
+  json j = good();
+  j["objects"][0]["orientation"] = {2, 0, 0, 2};  // 90 degrees about z, normalized on reading
+  j["events"].push_back(
+      {{"time", 0.3}, {"type", "move"}, {"object", "cup"}, {"position", {1, 2, 3}}});
+  j["events"].push_back(
+      {{"time", 0.2}, {"type", "listener"}, {"position", {0, -1, 0}}, {"forward", {1, 0, 0}}});
+  const Scene s = parse_scene(j, ".");
+  const Quat& q = s.objects[0].orientation;
+  EXPECT_NEAR(q[0], std::sqrt(0.5), 1e-12);
+  EXPECT_NEAR(q[3], std::sqrt(0.5), 1e-12);
+  const Vec3 x = rotate(q, {1, 0, 0});
+  EXPECT_NEAR(x[1], 1.0, 1e-12);  // object x is world y
+  const Vec3 back = rotate_inverse(q, x);
+  EXPECT_NEAR(back[0], 1.0, 1e-12);
+  ASSERT_EQ(s.events.size(), 2u);
+  ASSERT_EQ(s.moves.size(), 2u);
+  EXPECT_FALSE(s.moves[0].object.has_value());  // the listener, sorted first
+  EXPECT_EQ(*s.moves[1].object, 1u);
+  EXPECT_DOUBLE_EQ((*s.moves[1].position)[2], 3.0);
+
+  j = good();
+  j["objects"][0]["orientation"] = {0, 0, 0, 0};
+  EXPECT_NE(error_of(j).find("$.objects[0].orientation: must be a non-zero quaternion"),
+            std::string::npos)
+      << error_of(j);
+  j = good();
+  j["events"].push_back({{"time", 0.3}, {"type", "move"}, {"object", "cup"}});
+  EXPECT_NE(error_of(j).find("$.events[2]: a move event needs 'position' or 'orientation'"),
+            std::string::npos)
+      << error_of(j);
+  j = good();
+  j["events"].push_back({{"time", 0.3}, {"type", "listener"}, {"forward", {0, 0, 1}}});
+  EXPECT_NE(error_of(j).find("must not be parallel"), std::string::npos) << error_of(j);
+  j = good();
+  j["events"].push_back({{"time", 0.3}, {"type", "teleport"}});
+  EXPECT_NE(error_of(j).find("unknown event type 'teleport' (known: impact, move, listener)"),
+            std::string::npos)
+      << error_of(j);
+}

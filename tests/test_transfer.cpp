@@ -30,10 +30,13 @@ TEST(Spherical, BesselAndNeumannMatchTheStandardLibrary) {
     sph_hankel1(L, x, h);
     for (int l = 0; l <= L; ++l) {
       const double jr = std::sph_bessel(unsigned(l), x), yr = std::sph_neumann(unsigned(l), x);
-      if (std::abs(jr) > 1e-290)
+      if (std::abs(jr) > 1e-290) {
         EXPECT_NEAR(j[l], jr, 1e-10 * std::abs(jr) + 1e-14) << l << " " << x;
+      }
       EXPECT_NEAR(h[l].real(), jr, 1e-9 * std::abs(h[l]) + 1e-14) << l << " " << x;
-      if (std::isfinite(yr)) EXPECT_NEAR(h[l].imag(), yr, 1e-10 * std::abs(yr)) << l << " " << x;
+      if (std::isfinite(yr)) {
+        EXPECT_NEAR(h[l].imag(), yr, 1e-10 * std::abs(yr)) << l << " " << x;
+      }
     }
   }
 }
@@ -361,7 +364,9 @@ TEST(TransferGains, CpuAndGpuMatchTheDoubleReference) {
           first ? std::abs(a.pressure(i, la)) : std::abs(b.pressure(i - a.mode_count(), lb));
       ASSERT_TRUE(std::isfinite(ref));
       EXPECT_NEAR(cpu[i], ref, 1e-4 * ref + 1e-30) << "mode " << i;
-      if (gpu) EXPECT_NEAR(dev[i], ref, 1e-4 * ref + 1e-30) << "gpu mode " << i;
+      if (gpu) {
+        EXPECT_NEAR(dev[i], ref, 1e-4 * ref + 1e-30) << "gpu mode " << i;
+      }
     }
   }
   if (ctx) {
@@ -393,6 +398,100 @@ TEST(TransferGains, DistanceAndDirectionShapeTheGain) {
   EXPECT_NEAR(at({1, 0, 0})[0], near[0], 1e-6 * near[0]);
   EXPECT_LT(at({1, 0, 0})[1], 1e-6 * near[1]);
   EXPECT_NEAR(at({0.6, 0, 0.8})[1], 0.8 * near[1], 1e-4 * near[1]);
+}
+
+}  // namespace
+}  // namespace chladni
+
+#include "chladni/core/scene.hpp"
+#include "chladni/runtime/cpu_filterbank.hpp"
+#include "chladni/runtime/render.hpp"
+
+namespace chladni {
+namespace {
+
+// Amplitude of the component at `hz` in samples [from, to) of channel 0 (Goertzel, Hann window).
+double tone(const AudioBuffer& a, double hz, std::size_t from, std::size_t to) {
+  std::complex<double> acc = 0;
+  double wsum = 0;
+  for (std::size_t n = from; n < to; ++n) {
+    const double w =
+        0.5 - 0.5 * std::cos(2 * std::numbers::pi * double(n - from) / double(to - from));
+    acc += w * double(a.samples[n * a.channels]) *
+           std::polar(1.0, -2 * std::numbers::pi * hz * double(n) / a.sample_rate);
+    wsum += w;
+  }
+  return 2 * std::abs(acc) / wsum;
+}
+
+// A render with transfer: mode A (500 Hz) radiates as a monopole, mode B (900 Hz) as a z-dipole.
+// On the object's z axis both sound; broadside B falls silent; a listener move mid-render and a
+// turned object change the balance accordingly, and distance scales the monopole as 1/r.
+TEST(TransferRender, ListenerAndObjectPoseShapeTheSound) {
+  ModalModel model;
+  model.name = "probe";
+  model.omega = {2 * std::numbers::pi * 500, 2 * std::numbers::pi * 900};
+  model.decay = {1.0, 1.0};
+  model.radiation = {1.0, 1.0};
+  Transfer t;
+  t.radius = 0.1;
+  ModeTransfer m;
+  m.order = 1;
+  m.wavenumber = model.omega[0] / 343.0;
+  t.add_mode(m, {cd(1, 0), 0, 0, 0});
+  m.wavenumber = model.omega[1] / 343.0;
+  t.add_mode(m, {0, 0, cd(1, 0), 0});
+  model.transfer = t;
+  const runtime::ObjectModes obj = runtime::object_modes(model);
+  ASSERT_NE(obj.transfer, nullptr);
+
+  auto render = [&](const Scene& scene) {
+    runtime::CpuFilterbankOptions fo;
+    fo.channels = 1;
+    fo.capacity = 1024;
+    fo.threads = 1;
+    runtime::CpuFilterbank fb(fo);
+    return runtime::render_scene(scene, {obj}, fb, {});
+  };
+  Scene s;
+  s.channels = 1;
+  s.duration = 1.0;
+  SceneObject so;
+  so.name = "probe";
+  s.objects = {so};
+  ImpactEvent ev;
+  ev.impulse = 1.0;
+  s.events = {ev};
+  const std::size_t half = 24000;
+
+  s.listener.position = {0, 0, 1};  // on the dipole's axis
+  const AudioBuffer axis = render(s);
+  s.listener.position = {1, 0, 0};  // broadside
+  const AudioBuffer side = render(s);
+  EXPECT_NEAR(tone(side, 500, 0, half) / tone(axis, 500, 0, half), 1.0, 1e-3);
+  EXPECT_LT(tone(side, 900, 0, half), 1e-3 * tone(axis, 900, 0, half));
+  EXPECT_GT(tone(axis, 900, 0, half), 0.1 * tone(axis, 500, 0, half));
+
+  s.listener.position = {0, 0, 2};  // twice as far on the axis: the monopole at half the level
+  const AudioBuffer far = render(s);
+  EXPECT_NEAR(tone(far, 500, 0, half) / tone(axis, 500, 0, half), 0.5, 5e-3);
+
+  // The object turned 90 degrees about y: its dipole axis now points along world x.
+  s.listener.position = {1, 0, 0};
+  s.objects[0].orientation = {std::cos(std::numbers::pi / 4), 0, std::sin(std::numbers::pi / 4), 0};
+  const AudioBuffer turned = render(s);
+  EXPECT_NEAR(tone(turned, 900, 0, half) / tone(axis, 900, 0, half), 1.0, 1e-3);
+
+  // A listener move at 0.5 s from the axis to broadside silences the dipole from there on.
+  s.objects[0].orientation = {1, 0, 0, 0};
+  s.listener.position = {0, 0, 1};
+  MoveEvent mv;
+  mv.time = 0.5;
+  mv.position = Vec3{1, 0, 0};
+  s.moves = {mv};
+  const AudioBuffer moved = render(s);
+  EXPECT_GT(tone(moved, 900, 0, half), 0.5 * tone(axis, 900, 0, half));
+  EXPECT_LT(tone(moved, 900, half, 2 * half), 1e-3 * tone(axis, 900, half, 2 * half));
 }
 
 }  // namespace

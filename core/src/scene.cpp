@@ -82,6 +82,21 @@ class Obj {
     if (!(n > 1e-12)) fail(at(key), "must be a non-zero vector");
     return {v[0] / n, v[1] / n, v[2] / n};
   }
+  Quat quaternion(const std::string& key) {
+    const json& v = get(key);
+    if (!v.is_array() || v.size() != 4) fail(at(key), "expected a quaternion [w, x, y, z]");
+    Quat q{};
+    double n = 0;
+    for (int k = 0; k < 4; ++k) {
+      if (!v[k].is_number()) fail(at(key) + "[" + std::to_string(k) + "]", "expected a number");
+      q[k] = v[k].get<double>();
+      if (!std::isfinite(q[k])) fail(at(key) + "[" + std::to_string(k) + "]", "must be finite");
+      n += q[k] * q[k];
+    }
+    if (!(n > 1e-12)) fail(at(key), "must be a non-zero quaternion");
+    for (double& c : q) c /= std::sqrt(n);
+    return q;
+  }
   const json& array(const std::string& key) {
     const json& v = get(key);
     if (!v.is_array()) fail(at(key), std::string("expected an array, got ") + v.type_name());
@@ -133,6 +148,7 @@ SceneObject parse_object(Obj o, const std::string& base_dir) {
   obj.name = o.string("name");
   if (obj.name.empty()) fail(o.at("name"), "must not be empty");
   if (o.has("position")) obj.position = o.vec3("position");
+  if (o.has("orientation")) obj.orientation = o.quaternion("orientation");
   obj.gain = o.non_negative("gain", 1.0);
   const int sources = int(o.has("modes")) + int(o.has("bar")) + int(o.has("soundbank"));
   if (sources != 1) fail(o.path(), "needs exactly one of 'modes', 'bar' or 'soundbank'");
@@ -163,18 +179,43 @@ SceneObject parse_object(Obj o, const std::string& base_dir) {
   return obj;
 }
 
-ImpactEvent parse_event(Obj o, const Scene& scene) {
-  ImpactEvent ev;
-  ev.json_path = o.path();
-  const std::string type = o.string("type");
-  if (type != "impact") fail(o.at("type"), "unknown event type '" + type + "' (known: impact)");
-  ev.time = o.number("time");
-  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
+std::size_t find_object(Obj& o, const Scene& scene) {
   const std::string name = o.string("object");
   const auto it = std::find_if(scene.objects.begin(), scene.objects.end(),
                                [&](const SceneObject& s) { return s.name == name; });
   if (it == scene.objects.end()) fail(o.at("object"), "unknown object '" + name + "'");
-  ev.object = static_cast<std::size_t>(it - scene.objects.begin());
+  return static_cast<std::size_t>(it - scene.objects.begin());
+}
+
+MoveEvent parse_move(Obj o, const Scene& scene, bool listener) {
+  MoveEvent ev;
+  ev.json_path = o.path();
+  o.string("type");
+  ev.time = o.number("time");
+  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
+  if (o.has("position")) ev.position = o.vec3("position");
+  if (listener) {
+    if (o.has("forward")) ev.forward = o.unit("forward");
+    if (o.has("up")) ev.up = o.unit("up");
+    if (!ev.position && !ev.forward && !ev.up)
+      fail(o.path(), "a listener event needs 'position', 'forward' or 'up'");
+  } else {
+    ev.object = find_object(o, scene);
+    if (o.has("orientation")) ev.orientation = o.quaternion("orientation");
+    if (!ev.position && !ev.orientation)
+      fail(o.path(), "a move event needs 'position' or 'orientation'");
+  }
+  o.done();
+  return ev;
+}
+
+ImpactEvent parse_event(Obj o, const Scene& scene) {
+  ImpactEvent ev;
+  ev.json_path = o.path();
+  o.string("type");
+  ev.time = o.number("time");
+  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
+  ev.object = find_object(o, scene);
   ev.impulse = o.number("impulse");
   if (!(ev.impulse > 0)) fail(o.at("impulse"), "must be > 0");
   if (o.has("direction")) ev.direction = o.unit("direction");
@@ -192,6 +233,19 @@ ImpactEvent parse_event(Obj o, const Scene& scene) {
 }
 
 }  // namespace
+
+Vec3 rotate(const Quat& q, const Vec3& v) {
+  // v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z)
+  const Vec3 u{q[1], q[2], q[3]};
+  const Vec3 t = cross(u, v);
+  const Vec3 t2 = cross(u, t);
+  return {v[0] + 2 * (q[0] * t[0] + t2[0]), v[1] + 2 * (q[0] * t[1] + t2[1]),
+          v[2] + 2 * (q[0] * t[2] + t2[2])};
+}
+
+Vec3 rotate_inverse(const Quat& q, const Vec3& v) {
+  return rotate({q[0], -q[1], -q[2], -q[3]}, v);
+}
 
 Scene parse_scene(const json& j, const std::string& base_dir) {
   Obj root(j, "$");
@@ -234,11 +288,27 @@ Scene parse_scene(const json& j, const std::string& base_dir) {
   }
   const json& events = root.array("events");
   for (std::size_t i = 0; i < events.size(); ++i) {
-    s.events.push_back(parse_event(Obj(events[i], index_path("$.events", i)), s));
+    const std::string path = index_path("$.events", i);
+    Obj peek(events[i], path);
+    const std::string type = peek.string("type");
+    if (type == "impact")
+      s.events.push_back(parse_event(Obj(events[i], path), s));
+    else if (type == "move" || type == "listener")
+      s.moves.push_back(parse_move(Obj(events[i], path), s, type == "listener"));
+    else
+      fail(peek.at("type"), "unknown event type '" + type + "' (known: impact, move, listener)");
   }
   root.done();
   std::stable_sort(s.events.begin(), s.events.end(),
                    [](const ImpactEvent& a, const ImpactEvent& b) { return a.time < b.time; });
+  std::stable_sort(s.moves.begin(), s.moves.end(),
+                   [](const MoveEvent& a, const MoveEvent& b) { return a.time < b.time; });
+  for (const MoveEvent& m : s.moves) {
+    if (m.object) continue;
+    const Vec3 f = m.forward.value_or(s.listener.forward), u = m.up.value_or(s.listener.up);
+    if (std::abs(f[0] * u[0] + f[1] * u[1] + f[2] * u[2]) > 0.999)
+      fail(m.json_path, "'forward' and 'up' must not be parallel");
+  }
   return s;
 }
 

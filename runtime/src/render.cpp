@@ -4,9 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <numbers>
+#include <thread>
 
 #include "chladni/core/error.hpp"
 #include "chladni/runtime/impact.hpp"
+#include "chladni/runtime/thread_pool.hpp"
+#include "chladni/runtime/transfer_gains.hpp"
 
 namespace chladni::runtime {
 namespace {
@@ -20,6 +23,7 @@ ObjectModes object_modes(const ModalModel& model) {
   model.validate();
   ObjectModes o;
   o.model = &model;
+  if (model.transfer) o.transfer = &*model.transfer;
   for (std::size_t i = 0; i < model.mode_count(); ++i) {
     const double wd = model.damped_omega(i);
     o.modes.push_back({wd, model.decay[i], static_cast<float>(model.radiation[i] * wd * wd)});
@@ -82,26 +86,78 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
   so.max_voices = std::max<uint32_t>(so.max_voices, static_cast<uint32_t>(objects.size()));
   Synth synth(fb, so);
 
-  // Listener frame: right = forward x up.
-  const Listener& L = scene.listener;
-  const Vec3 right = cross(L.forward, L.up);
-  const double rn = std::sqrt(dot(right, right));
   std::vector<Synth::VoiceId> voices;
-  for (std::size_t k = 0; k < objects.size(); ++k) {
-    const SceneObject& so_k = scene.objects[k];
-    const Vec3 d = sub(so_k.position, L.position);
-    const double r = std::sqrt(dot(d, d));
-    const double g = scene.gain * so_k.gain / std::max(r, kMinDistance);
-    std::vector<ModeSpec> modes = objects[k].modes;
-    for (ModeSpec& m : modes) m.gain = static_cast<float>(m.gain * g);
-    const Synth::VoiceId v = synth.start_voice(modes);
-    if (scene.channels == 2) {
-      const double s = r > 1e-9 ? std::clamp(dot(d, right) / (r * rn), -1.0, 1.0) : 0.0;
-      const double theta = (s + 1.0) * std::numbers::pi / 4.0;  // constant-power pan
-      synth.set_pan(v, static_cast<float>(std::cos(theta)), static_cast<float>(std::sin(theta)));
-    }
-    voices.push_back(v);
+  for (const ObjectModes& obj : objects) voices.push_back(synth.start_voice(obj.modes));
+
+  // Poses change with move events; transfer gains for all objects that have transfer at once.
+  Listener listener = scene.listener;
+  std::vector<Vec3> position;
+  std::vector<Quat> orientation;
+  for (const SceneObject& so_k : scene.objects) {
+    position.push_back(so_k.position);
+    orientation.push_back(so_k.orientation);
   }
+  TransferTable table;
+  std::vector<int> table_object(objects.size(), -1);
+  for (std::size_t k = 0; k < objects.size(); ++k) {
+    if (!objects[k].transfer) continue;
+    if (objects[k].transfer->mode_count() != objects[k].modes.size())
+      throw InternalError("render: transfer and modes differ in count");
+    table_object[k] = static_cast<int>(table.add(*objects[k].transfer));
+  }
+  ListenerFrame frame;
+  std::vector<Vec3> listener_local(table.objects.size());
+  std::vector<float> table_gains(table.mode_count()), gains;
+  std::unique_ptr<GpuTransferGains> gpu_gains;
+  if (options.gain_device && table.mode_count() >= options.gpu_gain_modes)
+    gpu_gains = std::make_unique<GpuTransferGains>(options.gain_device, table);
+  ThreadPool pool(
+      table.mode_count() >= 4096 ? int(std::max(1u, std::thread::hardware_concurrency())) : 1);
+  RenderReport rep;
+  rep.gain_backend = table.mode_count() == 0 ? "" : gpu_gains ? "gpu" : "cpu";
+  auto update_gains = [&] {
+    const auto g0 = std::chrono::steady_clock::now();
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+      if (table_object[k] >= 0)
+        listener_local[table_object[k]] =
+            rotate_inverse(orientation[k], sub(listener.position, position[k]));
+    }
+    if (table.mode_count() > 0) {
+      frame.update(table, listener_local);
+      if (gpu_gains)
+        gpu_gains->compute(frame, table_gains);
+      else
+        transfer_gains(table, frame, table_gains, &pool);
+    }
+    // Listener frame: right = forward x up.
+    const Vec3 right = cross(listener.forward, listener.up);
+    const double rn = std::sqrt(dot(right, right));
+    for (std::size_t k = 0; k < objects.size(); ++k) {
+      const Vec3 d = sub(position[k], listener.position);
+      const double r = std::sqrt(dot(d, d));
+      const double g = scene.gain * scene.objects[k].gain;
+      gains.resize(objects[k].modes.size());
+      if (table_object[k] >= 0) {
+        const float* src = table_gains.data() + table.objects[table_object[k]].first_mode;
+        for (std::size_t i = 0; i < gains.size(); ++i) gains[i] = static_cast<float>(g * src[i]);
+      } else {
+        const double spread = g / std::max(r, kMinDistance);
+        for (std::size_t i = 0; i < gains.size(); ++i)
+          gains[i] = static_cast<float>(objects[k].modes[i].gain * spread);
+      }
+      synth.set_mode_gains(voices[k], gains);
+      if (scene.channels == 2) {
+        const double s = r > 1e-9 && rn > 0 ? std::clamp(dot(d, right) / (r * rn), -1.0, 1.0) : 0.0;
+        const double theta = (s + 1.0) * std::numbers::pi / 4.0;  // constant-power pan
+        synth.set_pan(voices[k], static_cast<float>(std::cos(theta)),
+                      static_cast<float>(std::sin(theta)));
+      }
+    }
+    ++rep.gain_updates;
+    rep.gain_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count();
+  };
+  update_gains();
 
   const double last_event = scene.events.empty() ? 0.0 : scene.events.back().time;
   const uint64_t limit = static_cast<uint64_t>(
@@ -113,11 +169,31 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
                         scene.channels);
   std::vector<float> buf(static_cast<std::size_t>(block) * scene.channels);
   std::vector<std::complex<float>> amps;
-  std::size_t next = 0;
+  std::size_t next = 0, next_move = 0;
   uint64_t t = 0;
-  RenderReport rep;
   while (t < limit) {
     uint32_t frames = static_cast<uint32_t>(std::min<uint64_t>(block, limit - t));
+    // Moves take effect at their first sample: apply those due, end the block before the next.
+    bool moved = false;
+    while (next_move < scene.moves.size()) {
+      const MoveEvent& mv = scene.moves[next_move];
+      const uint64_t at = static_cast<uint64_t>(std::ceil(mv.time * fs));
+      if (at > t) {
+        if (at < t + frames) frames = static_cast<uint32_t>(at - t);
+        break;
+      }
+      if (mv.object) {
+        if (mv.position) position[*mv.object] = *mv.position;
+        if (mv.orientation) orientation[*mv.object] = *mv.orientation;
+      } else {
+        if (mv.position) listener.position = *mv.position;
+        if (mv.forward) listener.forward = *mv.forward;
+        if (mv.up) listener.up = *mv.up;
+      }
+      moved = true;
+      ++next_move;
+    }
+    if (moved) update_gains();
     // Events whose first sample falls in [t, t + frames): sample = ceil(time * fs).
     while (next < scene.events.size()) {
       const ImpactEvent& ev = scene.events[next];
@@ -138,8 +214,8 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
     t += frames;
     if (options.progress && (t / block) % 256 == 0) options.progress(double(t) / double(limit));
     // Without a duration, stop once every event is played and everything has rung out.
-    if (!scene.duration && next == scene.events.size() && synth.active_modes() == 0 &&
-        double(t) / fs >= last_event) {
+    if (!scene.duration && next == scene.events.size() && next_move == scene.moves.size() &&
+        synth.active_modes() == 0 && double(t) / fs >= last_event) {
       break;
     }
   }

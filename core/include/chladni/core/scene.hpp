@@ -12,6 +12,13 @@
 
 namespace chladni {
 
+/// Unit quaternion (w, x, y, z) rotating object coordinates into world coordinates.
+using Quat = std::array<double, 4>;
+/// q v q*: object frame to world frame.
+Vec3 rotate(const Quat& q, const Vec3& v);
+/// q* v q: world frame to object frame.
+Vec3 rotate_inverse(const Quat& q, const Vec3& v);
+
 struct Listener {
   Vec3 position{0, 0, 0};
   Vec3 forward{0, 1, 0};
@@ -41,6 +48,7 @@ struct SceneObject {
   BarSpec bar;
   std::string soundbank;  ///< path resolved against the scene file's folder
   Vec3 position{0, 0, 0};
+  Quat orientation{1, 0, 0, 0};  ///< object frame -> world frame
   double gain = 1.0;
 };
 
@@ -55,6 +63,17 @@ struct ImpactEvent {
   double contact_time = 0;  ///< s; 0 = ideal impulse, else half-sine force of this duration
 };
 
+/// The listener or an object moves (jumps) to a new pose at `time`; gains from acoustic transfer
+/// and panning are recomputed there.
+struct MoveEvent {
+  std::string json_path;
+  double time = 0;
+  std::optional<std::size_t> object;  ///< none: the listener moves
+  std::optional<Vec3> position;
+  std::optional<Quat> orientation;  ///< objects
+  std::optional<Vec3> forward, up;  ///< listener
+};
+
 struct Scene {
   int sample_rate = 48000;
   int channels = 2;
@@ -63,6 +82,7 @@ struct Scene {
   Listener listener;
   std::vector<SceneObject> objects;
   std::vector<ImpactEvent> events;  ///< sorted by time
+  std::vector<MoveEvent> moves;     ///< sorted by time
 };
 
 /// Parses a scene from JSON; `base_dir` resolves relative file names. Throws InputError whose

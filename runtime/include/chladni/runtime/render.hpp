@@ -1,7 +1,10 @@
 #pragma once
 // Offline rendering of a scene: one voice per object, impacts placed sample-accurately, gains
-// from the listener's position (1/r spreading, constant-power pan in stereo).
+// from the listener's pose: per-mode |p(listener)| from acoustic transfer where the object has it,
+// else the mode's compact-source gain with 1/r spreading; constant-power pan in stereo. Gains are
+// recomputed whenever the listener or an object moves.
 #include <functional>
+#include <memory>
 #include <vector>
 
 #include "chladni/core/audio_file.hpp"
@@ -9,6 +12,10 @@
 #include "chladni/core/scene.hpp"
 #include "chladni/runtime/filterbank.hpp"
 #include "chladni/runtime/synth.hpp"
+
+namespace chladni::gpu {
+class Context;
+}
 
 namespace chladni::runtime {
 
@@ -18,6 +25,8 @@ struct ObjectModes {
   /// Complex state kick per mode for an impact; filled by impact_amplitudes().
   const ModalModel* model = nullptr;  ///< geometry-backed objects
   const std::vector<InlineMode>* inline_modes = nullptr;
+  /// Per-mode transfer (the model's, when it has one): gains then come from it, not from `gain`.
+  const Transfer* transfer = nullptr;
 };
 
 /// Builds the voice description of a modal model: gain_i = radiation_i * omega_d^2 (pressure from
@@ -36,6 +45,10 @@ struct RenderOptions {
   double max_tail = 60.0;  ///< s after the last event when the scene gives no duration
   SynthOptions synth;      ///< sample_rate is taken from the scene
   std::function<void(double fraction)> progress;  ///< optional
+  /// Evaluate transfer gains on this device when the scene has at least gpu_gain_modes modes
+  /// with transfer (null: always on the CPU).
+  std::shared_ptr<gpu::Context> gain_device;
+  std::size_t gpu_gain_modes = 20000;
 };
 
 struct RenderReport {
@@ -43,7 +56,10 @@ struct RenderReport {
   double peak = 0;
   SynthStats stats;
   uint32_t max_active_modes = 0;
-  double seconds = 0;  ///< wall time
+  double seconds = 0;         ///< wall time
+  uint64_t gain_updates = 0;  ///< listener-gain recomputations (start and each move)
+  double gain_seconds = 0;    ///< wall time spent in them
+  std::string gain_backend;   ///< "cpu", "gpu" or "" without transfer
 };
 
 /// Renders the scene; `objects[i]` describes scene.objects[i]. The filterbank's channel count must
