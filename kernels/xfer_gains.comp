@@ -25,7 +25,10 @@ layout(std430, binding = 2) readonly buffer Objects { Object objects[]; };
 layout(std430, binding = 3) readonly buffer Harmonics { float y[]; };
 layout(std430, binding = 4) writeonly buffer Gains { float gain[]; };
 
-layout(push_constant) uniform Push { uint mode_count; } pc;
+layout(push_constant) uniform Push {
+  uint mode_count;  // modes of this chunk; their coefficients start this chunk's buffer
+  uint first_mode;  // where the chunk's gains go
+} pc;
 
 vec2 cmul(vec2 p, vec2 q) { return vec2(p.x * q.x - p.y * q.y, p.x * q.y + p.y * q.x); }
 vec2 cdiv(vec2 p, vec2 q) { return cmul(p, vec2(q.x, -q.y)) / dot(q, q); }
@@ -53,5 +56,5 @@ void main() {
     for (uint k = 0; k <= uint(2 * l); ++k) s += a[m.offset + base + k] * y[o.y_offset + base + k];
     p += cmul(ratio, s);
   }
-  gain[i] = length(p);
+  gain[pc.first_mode + i] = length(p);
 }

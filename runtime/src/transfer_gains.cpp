@@ -24,29 +24,39 @@ constexpr int kModesPerTask = 2048;
 // together so orders whose g_l(x0) alone would overflow float still contribute their tiny share.
 float mode_gain(const TransferTable::Mode& m, const std::complex<float>* a, const float* y, float r,
                 float radius) {
-  const float x = m.k * r, x0 = m.k * radius;
-  std::complex<float> g0(0.0f, -1.0f / x), g1(-1.0f / x, -1.0f / (x * x));
-  std::complex<float> h0(0.0f, -1.0f / x0), h1(-1.0f / x0, -1.0f / (x0 * x0));
-  std::complex<float> p(0.0f, 0.0f);
+  // Plain float arithmetic: std::complex<float> division and abs go through __divsc3 and hypot,
+  // several times slower than the products they wrap.
+  const float ix = 1.0f / (m.k * r), ix0 = 1.0f / (m.k * radius);
+  float g0r = 0.0f, g0i = -ix, g1r = -ix, g1i = -ix * ix;        // g_0, g_1 at kr
+  float h0r = 0.0f, h0i = -ix0, h1r = -ix0, h1i = -ix0 * ix0;    // g_0, g_1 at kR
+  float pr = 0.0f, pi = 0.0f;
   const int L = static_cast<int>(m.order);
   for (int l = 0; l <= L; ++l) {
     if (l >= 2) {
       const float f = float(2 * l - 1);
-      const std::complex<float> g2 = (f / x) * g1 - g0, h2 = (f / x0) * h1 - h0;
-      g0 = g1, g1 = g2, h0 = h1, h1 = h2;
-      if (std::abs(h1.real()) + std::abs(h1.imag()) > 1e15f)
-        g0 *= 1e-15f, g1 *= 1e-15f, h0 *= 1e-15f, h1 *= 1e-15f;
+      const float g2r = f * ix * g1r - g0r, g2i = f * ix * g1i - g0i;
+      const float h2r = f * ix0 * h1r - h0r, h2i = f * ix0 * h1i - h0i;
+      g0r = g1r, g0i = g1i, g1r = g2r, g1i = g2i;
+      h0r = h1r, h0i = h1i, h1r = h2r, h1i = h2i;
+      if (std::abs(h1r) + std::abs(h1i) > 1e15f) {
+        g0r *= 1e-15f, g0i *= 1e-15f, g1r *= 1e-15f, g1i *= 1e-15f;
+        h0r *= 1e-15f, h0i *= 1e-15f, h1r *= 1e-15f, h1i *= 1e-15f;
+      }
     }
-    const std::complex<float> ratio = l == 0 ? g0 / h0 : g1 / h1;
+    const float gr = l == 0 ? g0r : g1r, gi = l == 0 ? g0i : g1i;
+    const float hr = l == 0 ? h0r : h1r, hi = l == 0 ? h0i : h1i;
+    const float inv = 1.0f / (hr * hr + hi * hi);
+    const float qr = (gr * hr + gi * hi) * inv, qi = (gi * hr - gr * hi) * inv;  // g / h
     float sr = 0.0f, si = 0.0f;
     const std::size_t base = std::size_t(l) * std::size_t(l);
     for (int k = 0; k <= 2 * l; ++k) {
       sr += a[base + k].real() * y[base + k];
       si += a[base + k].imag() * y[base + k];
     }
-    p += ratio * std::complex<float>(sr, si);
+    pr += qr * sr - qi * si;
+    pi += qr * si + qi * sr;
   }
-  return std::abs(p);
+  return std::sqrt(pr * pr + pi * pi);
 }
 
 struct CpuTask {
@@ -76,7 +86,7 @@ struct GpuObject {
   uint32_t y_offset, pad;
 };
 struct Push {
-  uint32_t mode_count;
+  uint32_t mode_count, first_mode;
 };
 
 }  // namespace
@@ -137,45 +147,63 @@ void transfer_gains(const TransferTable& table, const ListenerFrame& frame, std:
     for (int i = 0; i < tasks; ++i) cpu_task(&task, i);
 }
 
-GpuTransferGains::GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const TransferTable& t)
+GpuTransferGains::GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const TransferTable& t,
+                                   uint64_t max_chunk_bytes)
     : ctx_(std::move(ctx)),
       modes_(static_cast<uint32_t>(t.modes.size())),
       y_count_(t.y_count),
       objects_(static_cast<uint32_t>(t.objects.size())) {
   if (!ctx_) throw std::invalid_argument("GpuTransferGains needs a Vulkan context");
-  if ((uint64_t(modes_) + kLocal - 1) / kLocal > ctx_->limits().maxComputeWorkGroupCount[0])
-    throw gpu::Error("transfer gains: too many modes for one dispatch");
-  auto device = [&](std::size_t bytes) {
-    if (bytes > ctx_->limits().maxStorageBufferRange)
-      throw gpu::Error("transfer gains: table exceeds the device's storage buffer range");
-    return std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(bytes, 16),
-                                         gpu::Memory::DeviceLocal);
+  const uint64_t range = std::min<uint64_t>(ctx_->limits().maxStorageBufferRange, max_chunk_bytes);
+  auto device = [&](const void* data, std::size_t bytes) {
+    auto b = std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(bytes, 16),
+                                           gpu::Memory::DeviceLocal);
+    if (bytes > 0) b->upload(data, bytes);
+    return b;
   };
-  std::vector<GpuMode> modes(t.modes.size());
-  for (std::size_t i = 0; i < modes.size(); ++i)
-    modes[i] = {t.modes[i].k, t.modes[i].order, t.modes[i].offset, t.modes[i].object};
-  mode_buf_ = device(modes.size() * sizeof(GpuMode));
-  if (!modes.empty()) mode_buf_->upload(modes.data(), modes.size() * sizeof(GpuMode));
-  coeff_buf_ = device(t.coefficients.size() * sizeof(std::complex<float>));
-  if (!t.coefficients.empty())
-    coeff_buf_->upload(t.coefficients.data(), t.coefficients.size() * sizeof(std::complex<float>));
-  // Per-update inputs and the result are host-visible: small, written and read every update.
-  object_buf_ = std::make_unique<gpu::Buffer>(
-      *ctx_, std::max<std::size_t>(objects_ * sizeof(GpuObject), 16), gpu::Memory::HostVisible);
-  y_buf_ = std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(y_count_ * sizeof(float), 16),
+  auto host = [&](std::size_t bytes) {
+    if (bytes > ctx_->limits().maxStorageBufferRange)
+      throw gpu::Error("transfer gains: per-update data exceeds a buffer binding");
+    return std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(bytes, 16),
                                          gpu::Memory::HostVisible);
-  out_buf_ = std::make_unique<gpu::Buffer>(*ctx_, std::max<std::size_t>(modes_ * sizeof(float), 16),
-                                           gpu::Memory::HostVisible);
-  std::vector<GpuObject> objs(objects_);
+  };
+  // Per-update inputs and the result are host-visible: small, written and read every update.
+  object_buf_ = host(objects_ * sizeof(GpuObject));
+  y_buf_ = host(y_count_ * sizeof(float));
+  out_buf_ = host(modes_ * sizeof(float));
+  auto* objs = static_cast<GpuObject*>(object_buf_->data());
   for (uint32_t o = 0; o < objects_; ++o)
     objs[o] = {0.0f, float(t.objects[o].radius), t.objects[o].y_offset, 0u};
-  std::copy(objs.begin(), objs.end(), static_cast<GpuObject*>(object_buf_->data()));
-  pipeline_ = std::make_unique<gpu::Pipeline>(*ctx_, k_xfer_gains_spv, 5, sizeof(Push));
-  pipeline_->bind(0, *mode_buf_);
-  pipeline_->bind(1, *coeff_buf_);
-  pipeline_->bind(2, *object_buf_);
-  pipeline_->bind(3, *y_buf_);
-  pipeline_->bind(4, *out_buf_);
+
+  const uint64_t max_coeffs = range / sizeof(std::complex<float>);
+  for (uint32_t first = 0; first < modes_;) {
+    Chunk c;
+    c.first = first;
+    std::vector<GpuMode> modes;
+    const uint64_t base = t.modes[first].offset;
+    uint32_t i = first;
+    for (; i < modes_; ++i) {
+      const uint64_t end = t.modes[i].offset + sh_count(int(t.modes[i].order));
+      if (end - base > max_coeffs && i > first) break;
+      if (end - base > max_coeffs) throw gpu::Error("transfer gains: one mode exceeds a buffer binding");
+      modes.push_back({t.modes[i].k, t.modes[i].order, uint32_t(t.modes[i].offset - base),
+                       t.modes[i].object});
+    }
+    c.count = i - first;
+    if ((uint64_t(c.count) + kLocal - 1) / kLocal > ctx_->limits().maxComputeWorkGroupCount[0])
+      throw gpu::Error("transfer gains: too many modes for one dispatch");
+    const uint64_t end = t.modes[i - 1].offset + sh_count(int(t.modes[i - 1].order));
+    c.modes = device(modes.data(), modes.size() * sizeof(GpuMode));
+    c.coefficients = device(t.coefficients.data() + base, (end - base) * sizeof(std::complex<float>));
+    c.pipeline = std::make_unique<gpu::Pipeline>(*ctx_, k_xfer_gains_spv, 5, sizeof(Push));
+    c.pipeline->bind(0, *c.modes);
+    c.pipeline->bind(1, *c.coefficients);
+    c.pipeline->bind(2, *object_buf_);
+    c.pipeline->bind(3, *y_buf_);
+    c.pipeline->bind(4, *out_buf_);
+    chunks_.push_back(std::move(c));
+    first = i;
+  }
   seq_ = std::make_unique<gpu::Sequence>(*ctx_, 2);
 }
 
@@ -189,10 +217,12 @@ void GpuTransferGains::compute(const ListenerFrame& frame, std::span<float> out)
   auto* objs = static_cast<GpuObject*>(object_buf_->data());
   for (uint32_t o = 0; o < objects_; ++o) objs[o].r = frame.r[o];
   std::copy(frame.y.begin(), frame.y.end(), static_cast<float*>(y_buf_->data()));
-  const Push push{modes_};
   seq_->begin();
   seq_->timestamp(0);
-  seq_->dispatch(*pipeline_, (modes_ + kLocal - 1) / kLocal, &push, sizeof push);
+  for (const Chunk& c : chunks_) {
+    const Push push{c.count, c.first};
+    seq_->dispatch(*c.pipeline, (c.count + kLocal - 1) / kLocal, &push, sizeof push);
+  }
   seq_->timestamp(1);
   seq_->barrier();
   seq_->run();

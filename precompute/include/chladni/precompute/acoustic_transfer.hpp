@@ -30,12 +30,12 @@ struct AcousticOptions {
   std::size_t max_collocation = 4096;
   /// Collocation points: this many per source, at least min_collocation (rounded up to a level of
   /// the farthest-point order; a fine quadrature keeps spurious low orders out of the far field).
-  double collocation_per_source = 8.0;
+  double collocation_per_source = 3.0;
   std::size_t min_collocation = 1024;
   std::size_t held_out = 1000;   ///< surface points kept out of the fit to measure its error
   double regularization = 1e-6;  ///< Tikhonov weight on column-normalized sources
   enum class Solver { Qr, Normal };
-  Solver solver = Solver::Qr;  ///< Householder QR of the stack, or the normal equations
+  Solver solver = Solver::Normal;  ///< normal equations (zherk + Cholesky) or QR of the stack
   double truncation = 1e-3;    ///< drop the orders carrying less than this at r = 2R
   int threads = 0;             ///< modes fitted in parallel (0: all cores)
   void validate() const;       ///< throws InputError naming the bad field

@@ -62,11 +62,14 @@ struct ListenerFrame {
 void transfer_gains(const TransferTable& table, const ListenerFrame& frame, std::span<float> out,
                     ThreadPool* pool = nullptr);
 
-/// The same on a Vulkan device: coefficients stay on the device; an update uploads r and Y
-/// (kilobytes) and reads back one float per mode.
+/// The same on a Vulkan device: coefficients stay on the device (in as many buffers as the
+/// device's storage-buffer range requires); an update uploads r and Y (kilobytes), runs one
+/// dispatch per buffer in one submit and reads back one float per mode.
 class GpuTransferGains {
  public:
-  GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const TransferTable& table);
+  /// `max_chunk_bytes` bounds each coefficient buffer further than the device does (tests).
+  GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const TransferTable& table,
+                   uint64_t max_chunk_bytes = 1ull << 28);
   ~GpuTransferGains();
   void compute(const ListenerFrame& frame, std::span<float> out);
   /// Device time of the last compute() (0 without timestamps).
@@ -75,8 +78,14 @@ class GpuTransferGains {
  private:
   std::shared_ptr<gpu::Context> ctx_;
   uint32_t modes_ = 0, y_count_ = 0, objects_ = 0;
-  std::unique_ptr<gpu::Buffer> mode_buf_, coeff_buf_, object_buf_, y_buf_, out_buf_;
-  std::unique_ptr<gpu::Pipeline> pipeline_;
+  // Modes in chunks whose coefficients fit one storage-buffer binding of the device.
+  struct Chunk {
+    uint32_t first = 0, count = 0;
+    std::unique_ptr<gpu::Buffer> modes, coefficients;
+    std::unique_ptr<gpu::Pipeline> pipeline;
+  };
+  std::vector<Chunk> chunks_;
+  std::unique_ptr<gpu::Buffer> object_buf_, y_buf_, out_buf_;
   std::unique_ptr<gpu::Sequence> seq_;
   double device_ms_ = 0;
 };
