@@ -73,7 +73,8 @@ void run_info(const InfoArgs& a) {
                                     {"fit_residual", m.fit_residual},
                                     {"held_out_error", m.held_out_error},
                                     {"expansion_error", m.expansion_error},
-                                    {"poor_fit", b.transfer->poor(i)}};
+                                    {"poor_fit", b.transfer->poor(i)},
+                                    {"used_at_runtime", b.transfer->usable(i)}};
       }
     }
     j["modes"] = modes;
@@ -113,7 +114,10 @@ void run_info(const InfoArgs& a) {
     if (b.transfer) {
       const ModeTransfer& m = b.transfer->modes[i];
       std::printf(" %5u %7u %9.2e %9.2e %9.2e%s", m.order, m.sources, m.fit_residual,
-                  m.held_out_error, m.expansion_error, b.transfer->poor(i) ? "  POOR FIT" : "");
+                  m.held_out_error, m.expansion_error,
+                  !b.transfer->usable(i) ? "  POOR FIT (unused: compact-source gain instead)"
+                  : b.transfer->poor(i)  ? "  POOR FIT"
+                                         : "");
     }
     std::printf("\n");
   }

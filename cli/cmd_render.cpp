@@ -107,8 +107,8 @@ void run_render(const RenderArgs& a) {
     throw InputError("--format must be float, pcm24 or pcm16");
 
   if (!a.quiet)
-    std::printf("scene %s: %zu objects, %zu events\n", a.scene.c_str(), scene.objects.size(),
-                scene.events.size());
+    std::printf("scene %s: %zu objects, %zu impacts, %zu moves\n", a.scene.c_str(),
+                scene.objects.size(), scene.events.size(), scene.moves.size());
   std::vector<std::unique_ptr<ModalModel>> models;
   std::vector<runtime::ObjectModes> objects;
   resolve_objects(scene, models, objects, a.quiet);

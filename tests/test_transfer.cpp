@@ -501,6 +501,22 @@ TEST(TransferRender, ListenerAndObjectPoseShapeTheSound) {
   const AudioBuffer moved = render(s);
   EXPECT_GT(tone(moved, 900, 0, half), 0.5 * tone(axis, 900, 0, half));
   EXPECT_LT(tone(moved, 900, half, 2 * half), 1e-3 * tone(axis, 900, half, 2 * half));
+
+  // A fit that misses the surface data (held-out error > 1) is not used: that mode falls back to
+  // its compact-source gain over distance, the same in every direction.
+  model.transfer->modes[1].held_out_error = 2.0f;
+  const runtime::ObjectModes fallback = runtime::object_modes(model);
+  runtime::CpuFilterbankOptions fo;
+  fo.channels = 1, fo.capacity = 1024, fo.threads = 1;
+  s.moves.clear();
+  s.listener.position = {1, 0, 0};
+  runtime::CpuFilterbank fb1(fo);
+  const AudioBuffer fb_side = runtime::render_scene(s, {fallback}, fb1, {});
+  s.listener.position = {0, 0, 1};
+  runtime::CpuFilterbank fb2(fo);
+  const AudioBuffer fb_axis = runtime::render_scene(s, {fallback}, fb2, {});
+  EXPECT_GT(tone(fb_side, 900, 0, half), 0.0);
+  EXPECT_NEAR(tone(fb_side, 900, 0, half) / tone(fb_axis, 900, 0, half), 1.0, 1e-3);
 }
 
 }  // namespace

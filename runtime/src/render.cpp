@@ -137,13 +137,15 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
       const double r = std::sqrt(dot(d, d));
       const double g = scene.gain * scene.objects[k].gain;
       gains.resize(objects[k].modes.size());
-      if (table_object[k] >= 0) {
-        const float* src = table_gains.data() + table.objects[table_object[k]].first_mode;
-        for (std::size_t i = 0; i < gains.size(); ++i) gains[i] = static_cast<float>(g * src[i]);
-      } else {
-        const double spread = g / std::max(r, kMinDistance);
-        for (std::size_t i = 0; i < gains.size(); ++i)
-          gains[i] = static_cast<float>(objects[k].modes[i].gain * spread);
+      const double spread = g / std::max(r, kMinDistance);
+      const Transfer* xfer = objects[k].transfer;
+      const float* src = table_object[k] >= 0
+                             ? table_gains.data() + table.objects[table_object[k]].first_mode
+                             : nullptr;
+      for (std::size_t i = 0; i < gains.size(); ++i) {
+        // Transfer where its fit is usable, else the compact-source estimate over distance.
+        gains[i] = src && xfer->usable(i) ? static_cast<float>(g * src[i])
+                                          : static_cast<float>(objects[k].modes[i].gain * spread);
       }
       synth.set_mode_gains(voices[k], gains);
       if (scene.channels == 2) {

@@ -27,8 +27,8 @@ float mode_gain(const TransferTable::Mode& m, const std::complex<float>* a, cons
   // Plain float arithmetic: std::complex<float> division and abs go through __divsc3 and hypot,
   // several times slower than the products they wrap.
   const float ix = 1.0f / (m.k * r), ix0 = 1.0f / (m.k * radius);
-  float g0r = 0.0f, g0i = -ix, g1r = -ix, g1i = -ix * ix;        // g_0, g_1 at kr
-  float h0r = 0.0f, h0i = -ix0, h1r = -ix0, h1i = -ix0 * ix0;    // g_0, g_1 at kR
+  float g0r = 0.0f, g0i = -ix, g1r = -ix, g1i = -ix * ix;      // g_0, g_1 at kr
+  float h0r = 0.0f, h0i = -ix0, h1r = -ix0, h1i = -ix0 * ix0;  // g_0, g_1 at kR
   float pr = 0.0f, pi = 0.0f;
   const int L = static_cast<int>(m.order);
   for (int l = 0; l <= L; ++l) {
@@ -185,16 +185,18 @@ GpuTransferGains::GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const Tran
     for (; i < modes_; ++i) {
       const uint64_t end = t.modes[i].offset + sh_count(int(t.modes[i].order));
       if (end - base > max_coeffs && i > first) break;
-      if (end - base > max_coeffs) throw gpu::Error("transfer gains: one mode exceeds a buffer binding");
-      modes.push_back({t.modes[i].k, t.modes[i].order, uint32_t(t.modes[i].offset - base),
-                       t.modes[i].object});
+      if (end - base > max_coeffs)
+        throw gpu::Error("transfer gains: one mode exceeds a buffer binding");
+      modes.push_back(
+          {t.modes[i].k, t.modes[i].order, uint32_t(t.modes[i].offset - base), t.modes[i].object});
     }
     c.count = i - first;
     if ((uint64_t(c.count) + kLocal - 1) / kLocal > ctx_->limits().maxComputeWorkGroupCount[0])
       throw gpu::Error("transfer gains: too many modes for one dispatch");
     const uint64_t end = t.modes[i - 1].offset + sh_count(int(t.modes[i - 1].order));
     c.modes = device(modes.data(), modes.size() * sizeof(GpuMode));
-    c.coefficients = device(t.coefficients.data() + base, (end - base) * sizeof(std::complex<float>));
+    c.coefficients =
+        device(t.coefficients.data() + base, (end - base) * sizeof(std::complex<float>));
     c.pipeline = std::make_unique<gpu::Pipeline>(*ctx_, k_xfer_gains_spv, 5, sizeof(Push));
     c.pipeline->bind(0, *c.modes);
     c.pipeline->bind(1, *c.coefficients);

@@ -28,6 +28,9 @@ struct ModeTransfer {
 struct Transfer {
   /// Fits whose held-out error exceeds this are flagged as poor (chladni info).
   static constexpr float kPoorFit = 0.3f;
+  /// Beyond this the fit misses the surface data by more than the data itself: the runtime falls
+  /// back to the compact-source estimate for such modes.
+  static constexpr float kUnusable = 1.0f;
 
   Vec3 centre{0, 0, 0};        ///< expansion centre (m, object frame)
   double radius = 0;           ///< R (m)
@@ -45,6 +48,7 @@ struct Transfer {
   /// Complex pressure per unit modal amplitude at x (object frame), in double precision.
   std::complex<double> pressure(std::size_t mode, const Vec3& x) const;
   bool poor(std::size_t mode) const { return !(modes[mode].held_out_error <= kPoorFit); }
+  bool usable(std::size_t mode) const { return modes[mode].held_out_error <= kUnusable; }
   /// Throws InputError naming the first bad count, order or non-finite value.
   void validate() const;
   /// The listed modes only, in that order.
