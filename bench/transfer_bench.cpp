@@ -1,7 +1,8 @@
 // Acoustic-transfer speed (docs/PERFORMANCE.md, "Acoustic transfer"): the fit of the first N modes
 // of a soundbank per stage on the CPU (double) and GPU (float) kernels, and listener-gain updates
 // for a large number of modes from the resulting expansions.
-// Usage: chladni_transfer_bench BANK [--modes N] [--gain-modes M] [--json OUT]
+// Usage: chladni_transfer_bench BANK [--modes N] [--gain-modes M] [--solver normal|qr]
+//        [--backends cpu,gpu] [--json OUT]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -31,7 +32,7 @@ int main(int argc, char** argv) {
   }
   std::string bank_path = argv[1], json_path;
   std::size_t modes = 100, gain_modes = 100000;
-  std::string solver = "qr", runs = "cpu,gpu";
+  std::string solver = "normal", runs = "cpu,gpu";
   for (int i = 2; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--modes"))
       modes = std::stoul(argv[i + 1]);
