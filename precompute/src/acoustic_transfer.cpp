@@ -17,6 +17,12 @@
 // OpenBLAS's thread control, when the BLAS is OpenBLAS (weak: absent with another BLAS).
 extern "C" void openblas_set_num_threads(int) __attribute__((weak));
 extern "C" int openblas_get_num_threads() __attribute__((weak));
+// Level 3 only: this file is built without EIGEN_USE_BLAS because Debian 12's OpenBLAS
+// 0.3.21 zgemv_n kernel reads past the end of its operands (OpenBLAS issue #4013), which
+// ASan caught inside Eigen's BLAS-backed LLT; Eigen's own kernels do the level-2 work.
+extern "C" void zherk_(const char* uplo, const char* trans, const int* n, const int* k,
+                       const double* alpha, const double* a, const int* lda, const double* beta,
+                       double* c, const int* ldc);
 
 namespace chladni::precompute {
 namespace {
@@ -358,8 +364,8 @@ struct SourceFitter {
         Eigen::MatrixXcd G(nse, nse);
         const int n = static_cast<int>(nse), kk = static_cast<int>(nce);
         const double one = 1.0, zero = 0.0;
-        // Lower triangle of B^H B by the BLAS's Hermitian rank-k update (declared by Eigen's
-        // EIGEN_USE_BLAS bindings): half the flops of a general product.
+        // Lower triangle of B^H B by the BLAS's Hermitian rank-k update: half the flops of a
+        // general product, and the dominant cost of the fit (ns^2 nc against ns^3 / 3).
         zherk_("L", "C", &n, &kk, &one, reinterpret_cast<const double*>(B.data()), &kk, &zero,
                reinterpret_cast<double*>(G.data()), &n);
         G.diagonal().array() += o.regularization * o.regularization;
