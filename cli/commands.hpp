@@ -11,5 +11,6 @@ void add_precompute(CLI::App& app);
 void add_materials(CLI::App& app);
 void add_info(CLI::App& app);
 void add_radiate(CLI::App& app);
+void add_paper(CLI::App& app);
 
 }  // namespace chladni::cli

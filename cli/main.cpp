@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   chladni::cli::add_info(app);
   chladni::cli::add_materials(app);
   chladni::cli::add_radiate(app);
+  chladni::cli::add_paper(app);
   chladni::cli::add_render(app);
   chladni::cli::add_bench(app);
   chladni::cli::add_devices(app);

@@ -10,91 +10,21 @@
 #include <map>
 #include <numbers>
 
+#include "binary_io.hpp"
 #include "chladni/core/error.hpp"
 
 namespace chladni {
 namespace {
+
+using binary_io::crc32_of;
+using binary_io::Reader;
+using binary_io::Writer;
 
 // Layout (docs/soundbank-format.md): 32-byte header, section_count 32-byte table entries, then
 // 8-byte aligned payloads.
 constexpr char kMagic[8] = {'C', 'H', 'L', 'A', 'D', 'N', 'I', 'B'};
 constexpr std::size_t kHeaderSize = 32, kEntrySize = 32;
 constexpr std::size_t kMaxSections = 64;
-
-uint32_t crc32_of(const uint8_t* p, std::size_t n) {
-  uLong c = crc32(0L, Z_NULL, 0);
-  while (n > 0) {  // zlib takes uInt lengths
-    const uInt chunk = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
-    c = crc32(c, p, chunk);
-    p += chunk, n -= chunk;
-  }
-  return static_cast<uint32_t>(c);
-}
-
-// Explicit little-endian encoding, independent of the host's byte order.
-class Writer {
- public:
-  std::vector<uint8_t> bytes;
-  void u8s(const void* p, std::size_t n) {
-    const auto* b = static_cast<const uint8_t*>(p);
-    bytes.insert(bytes.end(), b, b + n);
-  }
-  template <class T>
-  void le(T v) {
-    using U = std::conditional_t<sizeof(T) == 8, uint64_t,
-                                 std::conditional_t<sizeof(T) == 4, uint32_t, uint16_t>>;
-    const U u = std::bit_cast<U>(v);
-    for (std::size_t k = 0; k < sizeof(T); ++k) bytes.push_back(uint8_t(u >> (8 * k)));
-  }
-  void str(const std::string& s) {
-    le<uint32_t>(static_cast<uint32_t>(s.size()));
-    u8s(s.data(), s.size());
-  }
-};
-
-class Reader {
- public:
-  Reader(const uint8_t* p, std::size_t n, std::string where)
-      : p_(p), n_(n), where_(std::move(where)) {}
-  template <class T>
-  T le() {
-    need(sizeof(T));
-    using U = std::conditional_t<sizeof(T) == 8, uint64_t,
-                                 std::conditional_t<sizeof(T) == 4, uint32_t, uint16_t>>;
-    U u = 0;
-    for (std::size_t k = 0; k < sizeof(T); ++k) u |= U(p_[pos_ + k]) << (8 * k);
-    pos_ += sizeof(T);
-    return std::bit_cast<T>(u);
-  }
-  std::string str(std::size_t max_len) {
-    const uint32_t len = le<uint32_t>();
-    if (len > max_len) fail("string length " + std::to_string(len) + " is implausible");
-    need(len);
-    std::string s(reinterpret_cast<const char*>(p_ + pos_), len);
-    pos_ += len;
-    return s;
-  }
-  // Count of items of `item_bytes` each that must still fit in the section.
-  void need_items(uint64_t count, std::size_t item_bytes, const char* what) {
-    if (count > (n_ - pos_) / item_bytes) {
-      fail(std::string(what) + ": " + std::to_string(count) + " items of " +
-           std::to_string(item_bytes) + " bytes do not fit in the " + std::to_string(n_ - pos_) +
-           " bytes left (truncated or corrupted)");
-    }
-  }
-  void expect_end() {
-    if (pos_ != n_) fail(std::to_string(n_ - pos_) + " unexpected trailing bytes");
-  }
-  [[noreturn]] void fail(const std::string& what) const { throw InputError(where_ + ": " + what); }
-
- private:
-  void need(std::size_t k) {
-    if (n_ - pos_ < k) fail("truncated (needs " + std::to_string(k) + " more bytes)");
-  }
-  const uint8_t* p_;
-  std::size_t n_, pos_ = 0;
-  std::string where_;
-};
 
 std::string tag_name(uint32_t tag) {
   std::string s;
