@@ -121,6 +121,7 @@ TEST(PaperMesh, CylinderCurvatureAndRulingsMatchTheAnalyticValues) {
   const auto topo = runtime::PaperTopology::build(a.vertex_count, a.triangles);
   runtime::PaperGeometry g;
   g.update(topo, a.frame(0));
+  g.update_shape(topo);
   // Interior vertices: H = 1 / (2r) in magnitude; faces: principal curvature 1/r, ruling = x.
   for (std::uint32_t j = 2; j + 2 < 21; ++j)
     for (std::uint32_t i = 2; i + 2 < 21; ++i)
@@ -137,6 +138,7 @@ TEST(PaperMesh, CylinderCurvatureAndRulingsMatchTheAnalyticValues) {
   EXPECT_LT(worst_k, 0.05);
   EXPECT_GT(worst_dir, 0.999);
   g.update(topo, a.frame(1));  // flat
+  g.update_shape(topo);
   for (double h : g.mean_curvature) EXPECT_NEAR(h, 0.0, 1e-6);
   for (double k : g.face_curvature) EXPECT_NEAR(k, 0.0, 1e-6);
 }
@@ -400,4 +402,44 @@ TEST(PaperCli, GeneratesAndAnalysesTheExamples) {
   // Bad input: exit code 2.
   const int status = std::system((exe + " paper " + dir + "/nope.json 2> /dev/null").c_str());
   EXPECT_EQ(WEXITSTATUS(status), 2);
+}
+
+TEST(PaperExamples, ShippedAnimationsHaveTheirEventsAtTheirFrames) {
+  for (const std::string n : {"slide", "shake", "flap", "crumple"}) {
+    const PaperAnimation a =
+        load_paper_animation(CHLADNI_SOURCE_DIR "/meshes/paper/" + n + ".json");
+    ASSERT_FALSE(a.event_frames.empty()) << n;
+    PaperAnalyzer an(a);
+    std::vector<std::uint32_t> friction, crumple;
+    double peak = 0;
+    std::vector<std::pair<std::uint32_t, double>> strong;
+    for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
+      for (const auto& e : an.analyze(f).events) {
+        EXPECT_FALSE(e.resonators.empty()) << n << " frame " << f;
+        if (e.type == PaperEventType::Friction) {
+          friction.push_back(f);
+        } else {
+          crumple.push_back(f);
+          peak = std::max(peak, e.amplitude);
+          strong.push_back({f, e.amplitude});
+        }
+      }
+    }
+    if (n == "slide") {
+      // Rubbing on every frame from the first to the last of the slide, and nothing else.
+      EXPECT_EQ(friction.size(), a.frame_count() - 1) << n;
+      EXPECT_EQ(friction.front(), a.event_frames.front());
+      EXPECT_EQ(friction.back(), a.event_frames.back());
+      EXPECT_TRUE(crumple.empty());
+      continue;
+    }
+    EXPECT_TRUE(friction.empty()) << n;
+    for (std::uint32_t g : a.event_frames)
+      EXPECT_TRUE(near_any(g, crumple, 2)) << n << ": no crumple near frame " << g;
+    for (const auto& [f, amp] : strong) {
+      if (amp > 0.2 * peak) {
+        EXPECT_TRUE(near_any(f, a.event_frames, 2)) << n << ": unexpected crumple at " << f;
+      }
+    }
+  }
 }

@@ -38,8 +38,10 @@ PaperAnalyzer::PaperAnalyzer(const PaperAnimation& anim, PaperAnalysisOptions op
   region_.resize(nf);
   curved_.resize(nf);
   mark_.resize(std::max(nv, nf));
-  reached_.resize(nf);
-  piece_.resize(nf);
+  flood_.resize(nf);
+  comp_stamp_.assign(nf, 0);
+  reach_stamp_.assign(nf, 0);
+  piece_stamp_.assign(nf, 0);
   piece_of_.assign(nf, 0);
 }
 
@@ -182,6 +184,7 @@ void PaperAnalyzer::detect_crumpling(std::vector<PaperEvent>& out) {
 // (|dihedral| > a_max) and edges whose ends are both held (anchored or in contact).
 void PaperAnalyzer::partition() {
   if (partitioned_) return;
+  geo_.update_shape(topo_);
   const std::size_t nf = topo_.triangles.size();
   for (std::size_t e = 0; e < topo_.edges.size(); ++e) {
     const auto [a, b] = topo_.edges[e];
@@ -206,6 +209,29 @@ void PaperAnalyzer::partition() {
       }
     }
   }
+  // Flood components: faces joined by edges that let vibrations through.
+  std::fill(flood_.begin(), flood_.end(), UINT32_MAX);
+  std::uint32_t comps = 0;
+  comp_start_.assign(1, 0);
+  comp_faces_.clear();
+  for (std::uint32_t seed = 0; seed < nf; ++seed) {
+    if (flood_[seed] != UINT32_MAX) continue;
+    flood_[seed] = comps;
+    stack_.assign(1, seed);
+    while (!stack_.empty()) {
+      const std::uint32_t f = stack_.back();
+      stack_.pop_back();
+      comp_faces_.push_back(f);
+      for (std::uint32_t e : topo_.face_edges[f]) {
+        if (topo_.border(e) || barrier_[e]) continue;
+        const std::uint32_t g = other_face(topo_, e, f);
+        if (flood_[g] == UINT32_MAX) flood_[g] = comps, stack_.push_back(g);
+      }
+    }
+    comp_start_.push_back(std::uint32_t(comp_faces_.size()));
+    ++comps;
+  }
+  cache_.clear();
   partitioned_ = true;
 }
 
@@ -214,32 +240,35 @@ void PaperAnalyzer::partition() {
 void PaperAnalyzer::find_resonators(const std::vector<std::uint32_t>& event_vertices,
                                     PaperEvent& ev) {
   partition();
-  const std::size_t nf = topo_.triangles.size();
-  std::fill(reached_.begin(), reached_.end(), 0);
-  stack_.clear();
-  for (std::uint32_t v : event_vertices) {
-    for (std::uint32_t e : topo_.edges_at(v)) {
+  // The flood from the event's faces is the union of the flood components they touch.
+  const std::uint32_t stamp = next_stamp();
+  comps_.clear();
+  for (std::uint32_t v : event_vertices)
+    for (std::uint32_t e : topo_.edges_at(v))
       for (std::int32_t f : topo_.edge_faces[e]) {
-        if (f >= 0 && !reached_[std::size_t(f)])
-          reached_[std::size_t(f)] = 1, stack_.push_back(std::uint32_t(f));
+        if (f < 0) continue;
+        const std::uint32_t c = flood_[std::size_t(f)];
+        if (comp_stamp_[c] != stamp) comp_stamp_[c] = stamp, comps_.push_back(c);
       }
+  std::sort(comps_.begin(), comps_.end());
+  // Events of one frame often shake the same part of the sheet: reuse its resonators.
+  for (const auto& [key, res] : cache_) {
+    if (key == comps_) {
+      ev.resonators = res;
+      return;
     }
   }
-  while (!stack_.empty()) {
-    const std::uint32_t f = stack_.back();
-    stack_.pop_back();
-    for (std::uint32_t e : topo_.face_edges[f]) {
-      if (topo_.border(e) || barrier_[e]) continue;
-      const std::uint32_t g = other_face(topo_, e, f);
-      if (!reached_[g]) reached_[g] = 1, stack_.push_back(g);
+  reached_list_.clear();
+  for (std::uint32_t c : comps_)
+    for (std::uint32_t i = comp_start_[c]; i < comp_start_[c + 1]; ++i) {
+      reached_list_.push_back(comp_faces_[i]);
+      reach_stamp_[comp_faces_[i]] = stamp;
     }
-  }
-  std::fill(piece_.begin(), piece_.end(), 0);
-  for (std::uint32_t seed = 0; seed < nf; ++seed) {
-    if (!reached_[seed] || piece_[seed]) continue;
+  for (std::uint32_t seed : reached_list_) {
+    if (piece_stamp_[seed] == stamp) continue;
     faces_.clear();
     stack_.assign(1, seed);
-    piece_[seed] = 1;
+    piece_stamp_[seed] = stamp;
     while (!stack_.empty()) {
       const std::uint32_t f = stack_.back();
       stack_.pop_back();
@@ -249,8 +278,8 @@ void PaperAnalyzer::find_resonators(const std::vector<std::uint32_t>& event_vert
         // table is one constrained resonator, not one per triangle.
         if (topo_.border(e) || std::abs(geo_.dihedral[e]) > opt_.ridge_angle) continue;
         const std::uint32_t g = other_face(topo_, e, f);
-        if (reached_[g] && !piece_[g] && region_[g] == region_[f])
-          piece_[g] = 1, stack_.push_back(g);
+        if (reach_stamp_[g] == stamp && piece_stamp_[g] != stamp && region_[g] == region_[f])
+          piece_stamp_[g] = stamp, stack_.push_back(g);
       }
     }
     PaperResonator r;
@@ -301,6 +330,17 @@ void PaperAnalyzer::find_resonators(const std::vector<std::uint32_t>& event_vert
     }
     if (r.area >= opt_.min_resonator_area) ev.resonators.push_back(r);
   }
+  cache_.emplace_back(comps_, ev.resonators);
+}
+
+std::uint32_t PaperAnalyzer::next_stamp() {
+  if (stamp_ == UINT32_MAX) {
+    std::fill(comp_stamp_.begin(), comp_stamp_.end(), 0);
+    std::fill(reach_stamp_.begin(), reach_stamp_.end(), 0);
+    std::fill(piece_stamp_.begin(), piece_stamp_.end(), 0);
+    stamp_ = 0;
+  }
+  return ++stamp_;
 }
 
 // Length of the straight line through face f's centroid along its ruling, walked across the

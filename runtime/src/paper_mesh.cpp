@@ -118,13 +118,10 @@ void PaperGeometry::update(const PaperTopology& topo, std::span<const float> xyz
   position.resize(nv);
   face_normal.resize(nf);
   face_area.resize(nf);
-  vertex_normal.assign(nv, Vec3{0, 0, 0});
   vertex_area.assign(nv, 0.0);
   dihedral.resize(ne);
   edge_length.resize(ne);
   mean_curvature.assign(nv, 0.0);
-  face_curvature.resize(nf);
-  ruling.resize(nf);
   for (std::size_t v = 0; v < nv; ++v)
     position[v] = {double(xyz[3 * v]), double(xyz[3 * v + 1]), double(xyz[3 * v + 2])};
   for (std::size_t f = 0; f < nf; ++f) {
@@ -133,12 +130,8 @@ void PaperGeometry::update(const PaperTopology& topo, std::span<const float> xyz
     const double twice = norm(n);
     face_area[f] = 0.5 * twice;
     face_normal[f] = unit_or(n, Vec3{0, 0, 1});
-    for (std::uint32_t v : t) {
-      vertex_normal[v] = add(vertex_normal[v], n);  // |n| = 2A: area weighting for free
-      vertex_area[v] += face_area[f] / 3.0;
-    }
+    for (std::uint32_t v : t) vertex_area[v] += face_area[f] / 3.0;
   }
-  for (auto& n : vertex_normal) n = unit_or(n, Vec3{0, 0, 1});
   for (std::size_t e = 0; e < ne; ++e) {
     const auto [a, b] = topo.edges[e];
     const Vec3 d = sub(position[b], position[a]);
@@ -160,6 +153,17 @@ void PaperGeometry::update(const PaperTopology& topo, std::span<const float> xyz
   }
   for (std::size_t v = 0; v < nv; ++v)
     mean_curvature[v] = vertex_area[v] > 0 ? mean_curvature[v] / (4.0 * vertex_area[v]) : 0.0;
+}
+
+void PaperGeometry::update_shape(const PaperTopology& topo) {
+  const std::size_t nf = topo.triangles.size();
+  face_curvature.resize(nf);
+  ruling.resize(nf);
+  vertex_normal.assign(position.size(), Vec3{0, 0, 0});
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::uint32_t v : topo.triangles[f])
+      vertex_normal[v] = add(vertex_normal[v], scale(face_normal[f], face_area[f]));
+  for (auto& n : vertex_normal) n = unit_or(n, Vec3{0, 0, 1});
   // Face shape operator S (dn = S dx in the face's tangent plane) fitted to the vertex normals
   // along the three edges by least squares (after Rusinkiewicz 2004); its eigenvector of the
   // smaller |eigenvalue| is the ruling (zero normal curvature on a developable sheet).

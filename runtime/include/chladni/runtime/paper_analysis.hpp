@@ -3,6 +3,7 @@
 // crumpling events, the partition into flat and curved regions, and for each event the
 // resonators it sets vibrating with their (l_r, l_c) parameters (§5).
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "chladni/core/paper_animation.hpp"
@@ -76,6 +77,7 @@ class PaperAnalyzer {
   void detect_crumpling(std::vector<PaperEvent>& out);
   void find_resonators(const std::vector<std::uint32_t>& event_vertices, PaperEvent& ev);
   double trace_ruling(std::uint32_t face) const;
+  std::uint32_t next_stamp();
 
   const PaperAnimation& anim_;
   PaperAnalysisOptions opt_;
@@ -90,7 +92,12 @@ class PaperAnalyzer {
   std::vector<std::int32_t> region_;       // per face
   std::vector<std::uint8_t> curved_;       // per face
   std::vector<std::int32_t> mark_;         // per vertex or face, flood labels
-  std::vector<std::uint8_t> reached_, piece_;
+  std::vector<std::uint32_t> flood_;       // per face: flood component (faces joined by open edges)
+  std::vector<std::uint32_t> comp_start_, comp_faces_;  // CSR: faces of each component
+  std::vector<std::uint32_t> comp_stamp_, reach_stamp_, piece_stamp_, comps_, reached_list_;
+  std::uint32_t stamp_ = 0;
+  // Resonators already found this frame, by the sorted flood components that produced them.
+  std::vector<std::pair<std::vector<std::uint32_t>, std::vector<PaperResonator>>> cache_;
   std::vector<std::int32_t> piece_of_;  // per face: label of the last resonator piece holding it
   std::int32_t piece_label_ = 0;
   std::vector<std::uint32_t> stack_, members_, faces_;

@@ -35,8 +35,9 @@ struct PaperTopology {
   }
 };
 
-/// Geometry of one frame. Buffers are reused across frames: `update` allocates nothing once
-/// sized.
+/// Geometry of one frame. Buffers are reused across frames: nothing is allocated once sized.
+/// `update` computes what every frame needs (event detection); `update_shape` the principal
+/// curvatures and rulings, needed only on frames with events.
 struct PaperGeometry {
   std::vector<Vec3> position;          ///< per vertex, m
   std::vector<Vec3> face_normal;       ///< unit
@@ -46,10 +47,11 @@ struct PaperGeometry {
   std::vector<double> dihedral;        ///< per edge, signed, rad (0 on borders)
   std::vector<double> edge_length;     ///< m
   std::vector<double> mean_curvature;  ///< per vertex, 1/m: sum(theta_e |e|) / (4 A_v)
-  std::vector<double> face_curvature;  ///< per face, the larger |principal curvature|, 1/m
-  std::vector<Vec3> ruling;            ///< per face, unit direction of the smaller curvature
+  std::vector<double> face_curvature;  ///< per face, larger |principal curvature| (update_shape)
+  std::vector<Vec3> ruling;  ///< per face, unit direction of the smaller one (update_shape)
 
   void update(const PaperTopology& topo, std::span<const float> xyz);
+  void update_shape(const PaperTopology& topo);
 };
 
 }  // namespace chladni::runtime

@@ -1,0 +1,88 @@
+// Paper-sound analysis speed (docs/PERFORMANCE.md, "Paper sound"): per-frame event detection and
+// resonator estimation (Schreck et al. 2016, §4) on the generated scenarios at the paper's
+// sheet sizes (183, 446 and 1,333 triangles, its Table 2) and at 20,000 triangles.
+// Usage: chladni_paper_bench [--triangles 183,446,1333,20000] [--repeat N] [--json OUT]
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "chladni/runtime/paper_analysis.hpp"
+#include "chladni/runtime/paper_scenarios.hpp"
+
+using namespace chladni;
+
+int main(int argc, char** argv) {
+  std::vector<std::uint32_t> sizes = {183, 446, 1333, 20000};
+  std::string json_path;
+  int repeat = 3;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--triangles")) {
+      sizes.clear();
+      std::stringstream ss(argv[i + 1]);
+      std::string tok;
+      while (std::getline(ss, tok, ',')) sizes.push_back(std::uint32_t(std::stoul(tok)));
+    } else if (!std::strcmp(argv[i], "--repeat")) {
+      repeat = std::max(1, std::atoi(argv[i + 1]));
+    } else if (!std::strcmp(argv[i], "--json")) {
+      json_path = argv[i + 1];
+    } else {
+      std::fprintf(stderr, "unknown option %s\n", argv[i]);
+      return 2;
+    }
+  }
+  nlohmann::json rows = nlohmann::json::array();
+  std::printf("%-8s %9s %7s | %12s %12s %14s | %7s %10s\n", "scenario", "triangles", "frames",
+              "mean ms", "max ms", "event-frame ms", "events", "resonators");
+  for (const std::string& name : runtime::paper_scenario_names()) {
+    for (std::uint32_t tris : sizes) {
+      runtime::PaperScenarioOptions o;
+      o.triangles = tris;
+      const runtime::PaperScenario s = runtime::make_paper_scenario(name, o);
+      const PaperAnimation& a = s.animation;
+      // Best of `repeat` passes per frame: the analysis is deterministic, the machine is not.
+      std::vector<double> best(a.frame_count(), 1e30);
+      std::size_t events = 0, resonators = 0;
+      std::vector<bool> has_event(a.frame_count(), false);
+      for (int r = 0; r < repeat; ++r) {
+        runtime::PaperAnalyzer an(a);
+        for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
+          const auto t0 = std::chrono::steady_clock::now();
+          const auto fa = an.analyze(f);
+          const double ms =
+              1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+          best[f] = std::min(best[f], ms);
+          if (r == 0) {
+            events += fa.events.size();
+            for (const auto& e : fa.events) resonators += e.resonators.size();
+            has_event[f] = !fa.events.empty();
+          }
+        }
+      }
+      double mean = 0, worst = 0, event_mean = 0;
+      std::size_t event_frames = 0;
+      for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
+        mean += best[f], worst = std::max(worst, best[f]);
+        if (has_event[f]) event_mean += best[f], ++event_frames;
+      }
+      mean /= a.frame_count();
+      event_mean = event_frames ? event_mean / double(event_frames) : 0;
+      std::printf("%-8s %9zu %7u | %12.3f %12.3f %14.3f | %7zu %10zu\n", name.c_str(),
+                  a.triangles.size(), a.frame_count(), mean, worst, event_mean, events, resonators);
+      rows.push_back({{"scenario", name},
+                      {"triangles", a.triangles.size()},
+                      {"frames", a.frame_count()},
+                      {"mean_ms", mean},
+                      {"max_ms", worst},
+                      {"event_frame_mean_ms", event_mean},
+                      {"events", events},
+                      {"resonators", resonators}});
+    }
+  }
+  if (!json_path.empty()) std::ofstream(json_path) << rows.dump(1) << "\n";
+  return 0;
+}
