@@ -53,12 +53,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-Vec3 scaled(const Vec3& v, double s) {
-  return {v[0] * s, v[1] * s, v[2] * s};
-}
-Vec3 add(const Vec3& a, const Vec3& b) {
-  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
 double dist2(const Vec3& a, const Vec3& b) {
   const Vec3 d = sub(a, b);
   return dot(d, d);
@@ -116,7 +110,7 @@ double ray_depth(const SurfaceMesh& m, const Vec3& o, const Vec3& dir, uint32_t 
 Vec3 at_barycentric(const SurfaceMesh& m, uint32_t t, const std::array<double, 3>& b) {
   const auto& tri = m.triangles[t];
   Vec3 x{0, 0, 0};
-  for (int c = 0; c < 3; ++c) x = add(x, scaled(m.vertices[tri[c]], b[c]));
+  for (int c = 0; c < 3; ++c) x = add(x, scale(m.vertices[tri[c]], b[c]));
   return x;
 }
 
@@ -173,7 +167,7 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
     if (!is_finite(v)) throw InputError("transfer: a surface vertex is not finite");
     for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], v[c]), hi[c] = std::max(hi[c], v[c]);
   }
-  centre_ = scaled(add(lo, hi), 0.5);
+  centre_ = scale(add(lo, hi), 0.5);
   for (const Vec3& v : mesh.vertices) radius_ = std::max(radius_, std::sqrt(dist2(v, centre_)));
 
   face_normal_.resize(nt);
@@ -190,14 +184,14 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
     const double len = std::sqrt(dot(n2, n2));
     face_area_[t] = 0.5 * len;
     area_ += face_area_[t];
-    face_normal_[t] = len > 0 ? scaled(n2, 1.0 / len) : Vec3{0, 0, 0};
+    face_normal_[t] = len > 0 ? scale(n2, 1.0 / len) : Vec3{0, 0, 0};
     centroid_[t] = at_barycentric(mesh, static_cast<uint32_t>(t), {1.0 / 3, 1.0 / 3, 1.0 / 3});
     for (uint32_t v : tri) vertex_normal_[v] = add(vertex_normal_[v], n2);
   }
   if (!(area_ > 0)) throw InputError("transfer: the surface has no area");
   for (Vec3& n : vertex_normal_) {
     const double len = std::sqrt(dot(n, n));
-    n = len > 0 ? scaled(n, 1.0 / len) : Vec3{0, 0, 1};
+    n = len > 0 ? scale(n, 1.0 / len) : Vec3{0, 0, 1};
   }
 
   // Source anchors: spread vertices, each with the wall thickness below it.
@@ -207,7 +201,7 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
     for (std::size_t i = b; i < e; ++i) {
       const uint32_t v = anchors_[i];
       const double d =
-          ray_depth(mesh_, mesh_.vertices[v], scaled(vertex_normal_[v], -1.0), v, 1e-9 * radius_);
+          ray_depth(mesh_, mesh_.vertices[v], scale(vertex_normal_[v], -1.0), v, 1e-9 * radius_);
       anchor_depth_[i] = std::min(std::isfinite(d) ? 0.45 * d : radius_, 0.5 * radius_);
     }
   });
@@ -303,7 +297,7 @@ struct SourceFitter {
       // other to make the surface's detail, which single precision cannot afford.
       const double depth = std::min(o.source_depth * spacing, s.anchor_depth_[i]);
       f.sources.push_back(
-          sub(sub(s.mesh_.vertices[v], scaled(s.vertex_normal_[v], depth)), s.centre_));
+          sub(sub(s.mesh_.vertices[v], scale(s.vertex_normal_[v], depth)), s.centre_));
     }
     const RadiatingSurface::Level* lv = &s.levels_.back();
     for (const auto& l : s.levels_) {

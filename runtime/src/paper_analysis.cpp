@@ -9,16 +9,6 @@
 namespace chladni::runtime {
 namespace {
 
-Vec3 add(const Vec3& a, const Vec3& b) {
-  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-Vec3 scale(const Vec3& a, double s) {
-  return {a[0] * s, a[1] * s, a[2] * s};
-}
-double norm(const Vec3& a) {
-  return std::sqrt(dot(a, a));
-}
-
 std::uint32_t other_face(const PaperTopology& t, std::uint32_t e, std::uint32_t f) {
   const auto& ef = t.edge_faces[e];
   return std::uint32_t(ef[0] == std::int32_t(f) ? ef[1] : ef[0]);
@@ -83,6 +73,22 @@ PaperFrameAnalysis PaperAnalyzer::analyze(std::uint32_t frame) {
   return out;
 }
 
+template <class Pred>
+void PaperAnalyzer::collect_vertices(std::uint32_t seed, Pred&& in_set) {
+  members_.clear();
+  stack_.assign(1, seed);
+  mark_[seed] = 1;
+  while (!stack_.empty()) {
+    const std::uint32_t v = stack_.back();
+    stack_.pop_back();
+    members_.push_back(v);
+    for (std::uint32_t e : topo_.edges_at(v)) {
+      const std::uint32_t u = topo_.other(e, v);
+      if (!mark_[u] && in_set(u)) mark_[u] = 1, stack_.push_back(u);
+    }
+  }
+}
+
 // Friction (§4): connected vertices within the contact distance of one obstacle; amplitude =
 // their mean speed along the plane (sliding, not lifting, rubs).
 void PaperAnalyzer::detect_friction(std::uint32_t frame, std::vector<PaperEvent>& out) {
@@ -96,18 +102,7 @@ void PaperAnalyzer::detect_friction(std::uint32_t frame, std::vector<PaperEvent>
     std::fill(mark_.begin(), mark_.begin() + std::ptrdiff_t(nv), 0);
     for (std::uint32_t seed = 0; seed < nv; ++seed) {
       if (mark_[seed] || !touching(seed)) continue;
-      members_.clear();
-      stack_.assign(1, seed);
-      mark_[seed] = 1;
-      while (!stack_.empty()) {
-        const std::uint32_t v = stack_.back();
-        stack_.pop_back();
-        members_.push_back(v);
-        for (std::uint32_t e : topo_.edges_at(v)) {
-          const std::uint32_t u = topo_.other(e, v);
-          if (!mark_[u] && touching(u)) mark_[u] = 1, stack_.push_back(u);
-        }
-      }
+      collect_vertices(seed, touching);
       double speed = 0;
       Vec3 c{0, 0, 0};
       for (std::uint32_t v : members_) {
@@ -152,18 +147,7 @@ void PaperAnalyzer::detect_crumpling(std::vector<PaperEvent>& out) {
     // the finger or ruler that holds them.
     const int kind = mark_[seed] || constrained_[seed] ? 0 : change(seed);
     if (!kind) continue;
-    members_.clear();
-    stack_.assign(1, seed);
-    mark_[seed] = 1;
-    while (!stack_.empty()) {
-      const std::uint32_t v = stack_.back();
-      stack_.pop_back();
-      members_.push_back(v);
-      for (std::uint32_t e : topo_.edges_at(v)) {
-        const std::uint32_t u = topo_.other(e, v);
-        if (!mark_[u] && !constrained_[u] && change(u) == kind) mark_[u] = 1, stack_.push_back(u);
-      }
-    }
+    collect_vertices(seed, [&](std::uint32_t u) { return !constrained_[u] && change(u) == kind; });
     PaperEvent ev;
     ev.type = PaperEventType::Crumple;
     Vec3 c{0, 0, 0};

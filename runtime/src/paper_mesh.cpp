@@ -10,15 +10,6 @@
 namespace chladni::runtime {
 namespace {
 
-Vec3 add(const Vec3& a, const Vec3& b) {
-  return {a[0] + b[0], a[1] + b[1], a[2] + b[2]};
-}
-Vec3 scale(const Vec3& a, double s) {
-  return {a[0] * s, a[1] * s, a[2] * s};
-}
-double norm(const Vec3& a) {
-  return std::sqrt(dot(a, a));
-}
 Vec3 unit_or(const Vec3& a, const Vec3& fallback) {
   const double n = norm(a);
   return n > 0 ? scale(a, 1.0 / n) : fallback;

@@ -95,6 +95,21 @@ std::uint32_t frame_of(double t, double rate) {
   return std::uint32_t(std::lround(t * rate));
 }
 
+// The common end of a scenario: the hands, the table, the listener and what to expect.
+void finish(PaperScenario& s, PaperAnchor held, std::uint32_t frames, const Vec3& listener,
+            const std::vector<double>& event_times, double width, double length,
+            const char* description) {
+  PaperAnimation& a = s.animation;
+  held.last_frame = frames - 1;
+  a.anchors = {std::move(held)};
+  a.obstacles = {table()};
+  a.listener.position = listener;
+  for (double t : event_times) s.event_frames.push_back(frame_of(t, a.frame_rate));
+  std::sort(s.event_frames.begin(), s.event_frames.end());
+  s.sheet_width = width, s.sheet_length = length;
+  s.description = description;
+}
+
 void slide(PaperScenario& s, const PaperScenarioOptions& o) {
   PaperAnimation& a = s.animation;
   const double W = 0.21, L = 0.297, T = o.duration > 0 ? o.duration : 3.0;
@@ -113,13 +128,9 @@ void slide(PaperScenario& s, const PaperScenarioOptions& o) {
   });
   PaperAnchor hand;
   for (std::uint32_t i = 0; i < g.nx; ++i) hand.vertices.push_back(g.id(i, g.ny - 1));
-  hand.last_frame = frames - 1;
-  a.anchors = {hand};
-  a.obstacles = {table()};
-  a.listener.position = {0.0, -0.5, 0.3};
+  finish(s, hand, frames, {0.0, -0.5, 0.3}, {}, W, L,
+         "a sheet slid on a table at 5 cm/s while its front edge curls up over it");
   s.event_frames = {1, frames - 1};
-  s.sheet_width = W, s.sheet_length = L;
-  s.description = "a sheet slid on a table at 5 cm/s while its front edge curls up over it";
 }
 
 void flap(PaperScenario& s, const PaperScenarioOptions& o) {
@@ -138,15 +149,9 @@ void flap(PaperScenario& s, const PaperScenarioOptions& o) {
   });
   PaperAnchor edge;  // held along the edge y = 0, which lies along the rulings
   for (std::uint32_t i = 0; i < g.nx; ++i) edge.vertices.push_back(g.id(i, 0));
-  edge.last_frame = frames - 1;
-  a.anchors = {edge};
-  a.obstacles = {table()};
-  a.listener.position = {0.0, -0.5, 0.3};
-  for (double ts : snaps) s.event_frames.push_back(frame_of(ts, a.frame_rate));
-  s.sheet_width = W, s.sheet_length = L;
-  s.description =
-      "a sheet held along one edge, 30 cm above a table, its bend snapping back "
-      "and forth every 0.5 s";
+  finish(s, edge, frames, {0.0, -0.5, 0.3}, snaps, W, L,
+         "a sheet held along one edge, 30 cm above a table, its bend snapping back and forth "
+         "every 0.5 s");
 }
 
 void shake(PaperScenario& s, const PaperScenarioOptions& o) {
@@ -165,15 +170,8 @@ void shake(PaperScenario& s, const PaperScenarioOptions& o) {
   });
   PaperAnchor corners;
   corners.vertices = {g.id(0, 0), g.id(g.nx - 1, 0)};
-  corners.last_frame = frames - 1;
-  a.anchors = {corners};
-  a.obstacles = {table()};
-  a.listener.position = {0.0, -0.6, 0.4};
-  for (double ts : snaps) s.event_frames.push_back(frame_of(ts, a.frame_rate));
-  s.sheet_width = W, s.sheet_length = L;
-  s.description =
-      "a sheet held by its two top corners, shaken at 2 Hz; its bend reverses at "
-      "each turn";
+  finish(s, corners, frames, {0.0, -0.6, 0.4}, snaps, W, L,
+         "a sheet held by its two top corners, shaken at 2 Hz; its bend reverses at each turn");
 }
 
 void crumple(PaperScenario& s, const PaperScenarioOptions& o) {
@@ -205,14 +203,10 @@ void crumple(PaperScenario& s, const PaperScenarioOptions& o) {
   });
   PaperAnchor hands;  // the middles of the two long edges
   hands.vertices = {g.id(0, g.ny / 2), g.id(g.nx - 1, g.ny / 2)};
-  hands.last_frame = frames - 1;
-  a.anchors = {hands};
-  a.obstacles = {table()};
-  a.listener.position = {0.0, -0.5, 0.3};
-  for (const Bump& b : bumps) s.event_frames.push_back(frame_of(b.t_snap, a.frame_rate));
-  std::sort(s.event_frames.begin(), s.event_frames.end());
-  s.sheet_width = W, s.sheet_length = L;
-  s.description = "a sheet squeezed between two hands while 12 bumps grow and snap through";
+  std::vector<double> snaps;
+  for (const Bump& b : bumps) snaps.push_back(b.t_snap);
+  finish(s, hands, frames, {0.0, -0.5, 0.3}, snaps, W, L,
+         "a sheet squeezed between two hands while 12 bumps grow and snap through");
 }
 
 }  // namespace

@@ -78,6 +78,9 @@ class PaperAnalyzer {
   void find_resonators(const std::vector<std::uint32_t>& event_vertices, PaperEvent& ev);
   double trace_ruling(std::uint32_t face) const;
   std::uint32_t next_stamp();
+  // The connected vertices from `seed` (marked in mark_) for which in_set holds, into members_.
+  template <class Pred>
+  void collect_vertices(std::uint32_t seed, Pred&& in_set);
 
   const PaperAnimation& anim_;
   PaperAnalysisOptions opt_;
