@@ -1,17 +1,26 @@
 // chladni paper-gen NAME -o DIR: the procedural example animations.
-// chladni paper ANIMATION.json --events OUT.json: the per-frame analysis (events, resonators).
+// chladni paper ANIMATION.json [--events OUT.json] [-o OUT.wav ...]: the per-frame analysis
+// (events, resonators) and, with -o, the synthesized and spatialized sound.
+// chladni paper-db generate|info: the sound databases.
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 
+#include "backend.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/paper_animation.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
+#include "chladni/runtime/paper_database.hpp"
 #include "chladni/runtime/paper_scenarios.hpp"
+#include "chladni/runtime/paper_synth.hpp"
 #include "commands.hpp"
+#include "progress.hpp"
+#include "spectrogram.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -38,9 +47,65 @@ void run_gen(const GenArgs& a) {
 }
 
 struct AnalyzeArgs {
-  std::string animation, events;
+  std::string animation, events, output, db, mode = "database", backend = "cpu", spectrogram;
+  std::vector<double> listener;
+  std::uint64_t seed = 1;
   runtime::PaperAnalysisOptions options;
 };
+
+runtime::PaperSoundDb database(const std::string& dir) {
+  if (!dir.empty()) return runtime::load_paper_database(dir);
+  const auto t = std::chrono::steady_clock::now();
+  runtime::PaperSoundDb db = runtime::generate_paper_database({});
+  std::printf(
+      "generated the default paper sound database in memory (%.1f s; keep one with "
+      "'chladni paper-db generate -o DIR' and pass --db DIR)\n",
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count());
+  return db;
+}
+
+void run_synthesis(const AnalyzeArgs& a, PaperAnimation& anim) {
+  runtime::PaperSynthOptions o;
+  o.mode = runtime::parse_paper_mode(a.mode);
+  o.seed = a.seed;
+  o.analysis = a.options;
+  if (!a.listener.empty()) {
+    if (a.listener.size() != 3) throw InputError("--listener: expected X,Y,Z");
+    for (double x : a.listener)
+      if (!std::isfinite(x)) throw InputError("--listener: coordinates must be finite");
+    anim.listener.position = {a.listener[0], a.listener[1], a.listener[2]};
+  }
+  std::optional<runtime::PaperSoundDb> db;
+  if (o.mode != runtime::PaperSynthMode::Modal) db = database(a.db);
+  std::unique_ptr<runtime::Filterbank> fb;
+  if (o.mode != runtime::PaperSynthMode::Database) {
+    BackendRequest r;
+    r.backend = a.backend;
+    r.channels = 2;
+    r.capacity = 1u << 18;
+    r.max_frames = 1024;
+    fb = make_filterbank(r);
+  }
+  runtime::PaperRenderReport rep;
+  const AudioBuffer audio = runtime::render_paper(anim, db ? &*db : nullptr, fb.get(), o, &rep);
+  write_wav(a.output, audio);
+  std::printf("wrote %s: %.2f s stereo at %d Hz, %s mode%s%s\n", a.output.c_str(),
+              rep.audio_seconds, audio.sample_rate, a.mode.c_str(), fb ? " on " : "",
+              fb ? fb->name().c_str() : "");
+  std::printf("  %llu friction and %llu crumpling events, %llu resonators (at most %u in a frame)",
+              (unsigned long long)rep.friction_events, (unsigned long long)rep.crumple_events,
+              (unsigned long long)rep.resonators, rep.max_resonators_in_frame);
+  if (fb) std::printf(", at most %u modal voices", rep.peak_modal_voices);
+  std::printf(
+      "\n  per frame: analysis %.3f ms + synthesis %.3f ms (worst frame %.3f ms); "
+      "%.0fx faster than real time\n",
+      rep.analysis_ms / rep.frames, rep.synthesis_ms / rep.frames, rep.worst_frame_ms,
+      rep.audio_seconds / rep.wall_seconds);
+  if (!a.spectrogram.empty()) {
+    write_spectrogram_png(a.spectrogram, audio);
+    std::printf("wrote %s\n", a.spectrogram.c_str());
+  }
+}
 
 nlohmann::json resonator_json(const runtime::PaperResonator& r) {
   return {{"curved", r.curved},       {"constrained", r.constrained}, {"faces", r.faces},
@@ -49,7 +114,11 @@ nlohmann::json resonator_json(const runtime::PaperResonator& r) {
 }
 
 void run_analyze(const AnalyzeArgs& a) {
-  const PaperAnimation anim = load_paper_animation(a.animation);
+  PaperAnimation anim = load_paper_animation(a.animation);
+  if (!a.output.empty()) {
+    run_synthesis(a, anim);
+    if (a.events.empty()) return;
+  }
   runtime::PaperAnalyzer analyzer(anim, a.options);
   nlohmann::json frames = nlohmann::json::array();
   std::size_t friction = 0, crumple = 0, resonators = 0;
@@ -101,6 +170,49 @@ void run_analyze(const AnalyzeArgs& a) {
   }
 }
 
+struct DbArgs {
+  std::string dir;
+  runtime::PaperDbOptions options;
+  double friction_seconds = 1.0;
+};
+
+void run_db_generate(const DbArgs& a) {
+  if (!(a.friction_seconds > 0.1)) throw InputError("--friction-seconds must be > 0.1");
+  const auto t = std::chrono::steady_clock::now();
+  ProgressBar progress(false);
+  progress.stage("sheet modes, clips and spectra");
+  const runtime::PaperSoundDb db =
+      runtime::generate_paper_database(a.options, [&](double f) { progress.fraction(f); });
+  progress.finish();
+  runtime::write_paper_database(a.dir, db, a.friction_seconds, a.options.seed);
+  std::size_t clips = 0, spectra = 0;
+  for (const auto& e : db.entries) {
+    clips += e.crumple.size();
+    for (const auto& [s, v] : e.friction) spectra += v.size();
+  }
+  std::printf("wrote %s: %zu entries, %zu crumple clips, %zu friction recordings (%.1f s)\n",
+              a.dir.c_str(), db.entries.size(), clips, spectra,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count());
+}
+
+void run_db_info(const DbArgs& a) {
+  const runtime::PaperSoundDb db = runtime::load_paper_database(a.dir);
+  std::size_t clips = 0, spectra = 0, samples = 0;
+  for (const auto& e : db.entries) {
+    clips += e.crumple.size();
+    for (const auto& c : e.crumple) samples += c.size();
+    for (const auto& [s, v] : e.friction) spectra += v.size();
+  }
+  std::string surfaces;
+  for (const auto& s : db.surfaces()) surfaces += (surfaces.empty() ? "" : ", ") + s;
+  std::printf(
+      "%s: %s\n  %zu entries at %g Hz, %zu crumple clips (mean %.0f ms), %zu friction "
+      "spectra (surfaces: %s), reference speed %g m/s\n",
+      a.dir.c_str(), db.description.c_str(), db.entries.size(), db.sample_rate, clips,
+      clips ? 1e3 * samples / clips / db.sample_rate : 0.0, spectra, surfaces.c_str(),
+      db.friction_reference_speed);
+}
+
 }  // namespace
 
 void add_paper(CLI::App& app) {
@@ -121,12 +233,43 @@ void add_paper(CLI::App& app) {
       "paper", "Analyse a paper animation: friction and crumpling events and their resonators");
   cmd->add_option("animation", a->animation, "ANIMATION.json (docs/paper-format.md)")->required();
   cmd->add_option("--events", a->events, "Write the events and resonators per frame as JSON");
+  cmd->add_option("-o,--output", a->output, "Synthesize the sound to this WAV (stereo, 44.1 kHz)");
+  cmd->add_option("--db", a->db,
+                  "Sound database folder (chladni paper-db generate); default: generated in "
+                  "memory");
+  cmd->add_option("--paper-mode", a->mode, "database | modal | both (database)");
+  cmd->add_option("--backend", a->backend, "Filterbank of the modal voices: cpu | gpu (cpu)");
+  cmd->add_option("--listener", a->listener, "Listener position X,Y,Z in metres")
+      ->delimiter(',')
+      ->expected(3);
+  cmd->add_option("--spectrogram", a->spectrogram, "Also write the sound's spectrogram as PNG");
+  cmd->add_option("--seed", a->seed, "Random seed (variants, phases, clicks)");
   cmd->add_option("--ridge-angle", a->options.ridge_angle, "a_max (rad) of a ridge (0.5)");
   cmd->add_option("--flat-curvature", a->options.flat_curvature,
                   "Curvature (1/m) below which a face is flat (2)");
   cmd->add_option("--crumple-curvature", a->options.crumple_curvature,
                   "|mean curvature| (1/m) that establishes a sign (1)");
   cmd->callback([a] { run_analyze(*a); });
+
+  auto* db =
+      app.add_subcommand("paper-db", "Paper sound databases: generate the default, inspect one");
+  db->require_subcommand(1);
+  auto d = std::make_shared<DbArgs>();
+  auto* dgen = db->add_subcommand("generate", "Generate the default database from the sheet model");
+  dgen->add_option("-o,--output", d->dir, "Database folder to write")->required();
+  dgen->add_option("--seed", d->options.seed, "Random seed (1)");
+  dgen->add_option("--variants", d->options.variants, "Clips and spectra per entry (3)");
+  dgen->add_option("--young", d->options.material.young, "Young's modulus of the paper, Pa (4e9)");
+  dgen->add_option("--loss-factor", d->options.material.loss_factor,
+                   "Structural loss factor (0.04)");
+  dgen->add_option("--clip-seconds", d->options.clip_seconds, "Crumple clip length (0.25)");
+  dgen->add_option("--friction-seconds", d->friction_seconds,
+                   "Length of each friction recording written (1)");
+  dgen->add_option("--surfaces", d->options.surfaces, "Friction surface names (wood)");
+  dgen->callback([d] { run_db_generate(*d); });
+  auto* dinfo = db->add_subcommand("info", "Summarize a database folder");
+  dinfo->add_option("dir", d->dir, "Database folder")->required();
+  dinfo->callback([d] { run_db_info(*d); });
 }
 
 }  // namespace chladni::cli

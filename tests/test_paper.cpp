@@ -13,6 +13,7 @@
 #include "chladni/core/paper_animation.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
 #include "chladni/runtime/paper_scenarios.hpp"
+#include "paper_fixtures.hpp"
 #include "test_support.hpp"
 
 namespace {
@@ -20,32 +21,8 @@ namespace {
 using namespace chladni;
 using runtime::PaperAnalyzer;
 using runtime::PaperEventType;
-
-// A two-frame animation from one flat W x L grid and a map material (u, v) -> position.
-template <class F0, class F1>
-PaperAnimation two_frames(std::uint32_t nx, std::uint32_t ny, double W, double L, F0 frame0,
-                          F1 frame1) {
-  PaperAnimation a;
-  a.vertex_count = nx * ny;
-  for (std::uint32_t j = 0; j + 1 < ny; ++j)
-    for (std::uint32_t i = 0; i + 1 < nx; ++i) {
-      const std::uint32_t p = j * nx + i;
-      a.triangles.push_back({p, p + 1, p + nx + 1});
-      a.triangles.push_back({p, p + nx + 1, p + nx});
-    }
-  for (int f = 0; f < 2; ++f)
-    for (std::uint32_t j = 0; j < ny; ++j)
-      for (std::uint32_t i = 0; i < nx; ++i) {
-        const double u = W * i / (nx - 1), v = L * j / (ny - 1);
-        const Vec3 x = f == 0 ? frame0(u, v) : frame1(u, v);
-        for (double c : x) a.positions.push_back(float(c));
-      }
-  return a;
-}
-
-Vec3 cylinder(double u, double v, double r) {  // axis along x, radius r, arc length v
-  return {u, r * std::sin(v / r), r * (1 - std::cos(v / r))};
-}
+using test::cylinder;
+using test::two_frames;
 
 // Frames with crumpling events, and the largest amplitude among them.
 std::vector<std::pair<std::uint32_t, double>> crumple_frames(const PaperAnimation& a) {

@@ -1,4 +1,4 @@
-#include "json_reader.hpp"
+#include "chladni/core/json_reader.hpp"
 
 #include <fstream>
 #include <sstream>

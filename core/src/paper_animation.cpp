@@ -8,7 +8,7 @@
 
 #include "binary_io.hpp"
 #include "chladni/core/error.hpp"
-#include "json_reader.hpp"
+#include "chladni/core/json_reader.hpp"
 
 namespace chladni {
 namespace {

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "chladni/core/error.hpp"
-#include "json_reader.hpp"
+#include "chladni/core/json_reader.hpp"
 
 namespace chladni {
 namespace {
