@@ -1,7 +1,10 @@
-// Paper-sound analysis speed (docs/PERFORMANCE.md, "Paper sound"): per-frame event detection and
-// resonator estimation (Schreck et al. 2016, §4) on the generated scenarios at the paper's
-// sheet sizes (183, 446 and 1,333 triangles, its Table 2) and at 20,000 triangles.
-// Usage: chladni_paper_bench [--triangles 183,446,1333,20000] [--repeat N] [--json OUT]
+// Paper-sound speed (docs/PERFORMANCE.md, "Paper sound"): per-frame event detection and
+// resonator estimation (Schreck et al. 2016, §4) alone, then analysis plus synthesis per frame
+// and the whole render's speed against real time in each synthesis mode (database; modal
+// voices on the CPU filterbank; with --gpu also on the Vulkan one), on the generated
+// scenarios at the paper's sheet sizes (183, 446 and 1,333 triangles, its Table 2) and at
+// 20,000 triangles.
+// Usage: chladni_paper_bench [--triangles 183,446,1333,20000] [--repeat N] [--gpu] [--json OUT]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -11,8 +14,12 @@
 #include <sstream>
 #include <string>
 
+#include "chladni/gpu/context.hpp"
+#include "chladni/runtime/cpu_filterbank.hpp"
+#include "chladni/runtime/gpu_filterbank.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
 #include "chladni/runtime/paper_scenarios.hpp"
+#include "chladni/runtime/paper_synth.hpp"
 
 using namespace chladni;
 
@@ -20,7 +27,17 @@ int main(int argc, char** argv) {
   std::vector<std::uint32_t> sizes = {183, 446, 1333, 20000};
   std::string json_path;
   int repeat = 3;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  bool use_gpu = false;
+  for (int i = 1; i < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--gpu")) {
+      use_gpu = true;
+      --i;
+      continue;
+    }
+    if (i + 1 >= argc) {
+      std::fprintf(stderr, "option %s needs a value\n", argv[i]);
+      return 2;
+    }
     if (!std::strcmp(argv[i], "--triangles")) {
       sizes.clear();
       std::stringstream ss(argv[i + 1]);
@@ -35,7 +52,26 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
+  const auto g0 = std::chrono::steady_clock::now();
+  const runtime::PaperSoundDb db = runtime::generate_paper_database({});
+  std::printf("default database generated in %.2f s\n",
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count());
+  runtime::CpuFilterbankOptions co;
+  co.channels = 2;
+  co.capacity = 1u << 18;
+  co.max_frames = 1024;
+  runtime::CpuFilterbank cpu(co);
+  std::unique_ptr<runtime::GpuFilterbank> gpu;
+  if (use_gpu) {
+    runtime::GpuFilterbankOptions go;
+    go.channels = 2;
+    go.capacity = 1u << 18;
+    go.max_frames = 1024;
+    gpu = std::make_unique<runtime::GpuFilterbank>(std::make_shared<gpu::Context>(), go);
+    std::printf("gpu: %s\n", gpu->name().c_str());
+  }
   nlohmann::json rows = nlohmann::json::array();
+  nlohmann::json synth_rows = nlohmann::json::array();
   std::printf("%-8s %9s %7s | %12s %12s %14s | %7s %10s\n", "scenario", "triangles", "frames",
               "mean ms", "max ms", "event-frame ms", "events", "resonators");
   for (const std::string& name : runtime::paper_scenario_names()) {
@@ -83,6 +119,59 @@ int main(int argc, char** argv) {
                       {"resonators", resonators}});
     }
   }
-  if (!json_path.empty()) std::ofstream(json_path) << rows.dump(1) << "\n";
+  // Analysis + synthesis per frame (best of `repeat` per frame) and the whole render.
+  std::printf("\n%-8s %9s %-10s | %10s %10s | %8s %10s\n", "scenario", "triangles", "mode",
+              "mean ms", "max ms", "x realtime", "voices");
+  for (const std::string& name : runtime::paper_scenario_names()) {
+    for (std::uint32_t tris : sizes) {
+      runtime::PaperScenarioOptions so;
+      so.triangles = tris;
+      const runtime::PaperScenario s = runtime::make_paper_scenario(name, so);
+      const PaperAnimation& a = s.animation;
+      std::vector<std::pair<std::string, runtime::Filterbank*>> modes = {{"database", nullptr},
+                                                                         {"modal-cpu", &cpu}};
+      if (gpu) modes.push_back({"modal-gpu", gpu.get()});
+      for (const auto& [mode, fb] : modes) {
+        runtime::PaperSynthOptions o;
+        o.mode = fb ? runtime::PaperSynthMode::Modal : runtime::PaperSynthMode::Database;
+        std::vector<double> best(a.frame_count(), 1e30);
+        double best_wall = 1e30, audio = 0;
+        std::uint32_t voices = 0;
+        for (int r = 0; r < repeat; ++r) {
+          const auto w0 = std::chrono::steady_clock::now();
+          runtime::PaperRenderer pr(a, &db, fb, o);
+          for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
+            const auto t0 = std::chrono::steady_clock::now();
+            pr.step();
+            best[f] = std::min(
+                best[f],
+                1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+          }
+          pr.finish();
+          best_wall = std::min(
+              best_wall,
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
+          audio = pr.report().audio_seconds;
+          voices = pr.report().peak_modal_voices;
+        }
+        double mean = 0, worst = 0;
+        for (double b : best) mean += b, worst = std::max(worst, b);
+        mean /= a.frame_count();
+        std::printf("%-8s %9zu %-10s | %10.3f %10.3f | %8.0f %10u\n", name.c_str(),
+                    a.triangles.size(), mode.c_str(), mean, worst, audio / best_wall, voices);
+        synth_rows.push_back({{"scenario", name},
+                              {"triangles", a.triangles.size()},
+                              {"mode", mode},
+                              {"frame_mean_ms", mean},
+                              {"frame_max_ms", worst},
+                              {"realtime_factor", audio / best_wall},
+                              {"peak_modal_voices", voices}});
+      }
+    }
+  }
+  if (!json_path.empty())
+    std::ofstream(json_path) << nlohmann::json{{"analysis", rows}, {"synthesis", synth_rows}}.dump(
+                                    1)
+                             << "\n";
   return 0;
 }

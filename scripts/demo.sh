@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job: install dependencies, build Chladni, precompute soundbanks for two bundled meshes
-# and render a scene that strikes them, to out/.
+# and render a scene that strikes them, and render two paper animations, to out/.
 # Usage: bash scripts/demo.sh            (from the repository root, as root on Debian 12)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -23,4 +23,10 @@ $chladni render examples/bowl_and_bar.json -o out/bowl_and_bar_gpu.wav --normali
   --backend gpu --block 1024
 # The analytic-bar example of the runtime (no precompute).
 $chladni render examples/struck_bar.json -o out/struck_bar.wav --normalize -1
-echo "demo: wrote out/bowl_and_bar.wav, out/bowl_and_bar_gpu.wav and out/struck_bar.wav"
+# Paper sound: a sheet slid on a table and curled (database mode, default database generated in
+# memory) and a crumpled sheet as modal voices on the GPU filterbank, with spectrograms.
+$chladni paper meshes/paper/slide.json -o out/paper_slide.wav --spectrogram out/paper_slide.png
+$chladni paper meshes/paper/crumple.json -o out/paper_crumple.wav --paper-mode both --backend gpu \
+  --spectrogram out/paper_crumple.png
+echo "demo: wrote out/bowl_and_bar.wav, out/bowl_and_bar_gpu.wav, out/struck_bar.wav," \
+  "out/paper_slide.wav and out/paper_crumple.wav (spectrograms beside them)"

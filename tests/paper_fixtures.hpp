@@ -7,10 +7,8 @@
 
 namespace chladni::test {
 
-// A two-frame animation from one flat W x L grid and a map material (u, v) -> position.
-template <class F0, class F1>
-inline PaperAnimation two_frames(std::uint32_t nx, std::uint32_t ny, double W, double L, F0 frame0,
-                                 F1 frame1) {
+// An animation over an nx x ny vertex grid (two triangles per cell) and no frames yet.
+inline PaperAnimation grid_sheet(std::uint32_t nx, std::uint32_t ny) {
   PaperAnimation a;
   a.vertex_count = nx * ny;
   for (std::uint32_t j = 0; j + 1 < ny; ++j)
@@ -19,6 +17,14 @@ inline PaperAnimation two_frames(std::uint32_t nx, std::uint32_t ny, double W, d
       a.triangles.push_back({p, p + 1, p + nx + 1});
       a.triangles.push_back({p, p + nx + 1, p + nx});
     }
+  return a;
+}
+
+// A two-frame animation from one flat W x L grid and a map material (u, v) -> position.
+template <class F0, class F1>
+inline PaperAnimation two_frames(std::uint32_t nx, std::uint32_t ny, double W, double L, F0 frame0,
+                                 F1 frame1) {
+  PaperAnimation a = grid_sheet(nx, ny);
   for (int f = 0; f < 2; ++f)
     for (std::uint32_t j = 0; j < ny; ++j)
       for (std::uint32_t i = 0; i < nx; ++i) {

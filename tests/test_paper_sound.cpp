@@ -319,16 +319,9 @@ TEST(PaperSynth, FrictionNearAWallShowsTheImageSourceNotches) {
   // normal lies in the wall's plane).
   const double W = 0.06, d = 0.05, speed = 0.02;
   const std::uint32_t frames = 240;
-  PaperAnimation a;
-  a.frame_rate = 60;
   const std::uint32_t nx = 7;
-  a.vertex_count = nx * nx;
-  for (std::uint32_t j = 0; j + 1 < nx; ++j)
-    for (std::uint32_t i = 0; i + 1 < nx; ++i) {
-      const std::uint32_t p = j * nx + i;
-      a.triangles.push_back({p, p + 1, p + nx + 1});
-      a.triangles.push_back({p, p + nx + 1, p + nx});
-    }
+  PaperAnimation a = test::grid_sheet(nx, nx);
+  a.frame_rate = 60;
   for (std::uint32_t f = 0; f < frames; ++f)
     for (std::uint32_t j = 0; j < nx; ++j)
       for (std::uint32_t i = 0; i < nx; ++i) {

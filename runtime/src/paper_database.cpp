@@ -53,8 +53,9 @@ std::vector<float> expected_friction_spectrum(const std::vector<SheetMode>& mode
     double p = 0;
     for (const SheetMode& m : modes) {
       const double w02 = m.omega * m.omega + m.decay * m.decay;
-      const std::complex<double> h = w * w / std::complex<double>(w02 - w * w, 2 * m.decay * w);
-      p += 0.25 * double(m.weight) * m.weight * std::norm(h);
+      const double re = w02 - w * w, im = 2 * m.decay * w;
+      const double h2 = (w * w) * (w * w) / (re * re + im * im);  // |h|^2, no complex division
+      p += 0.25 * double(m.weight) * m.weight * h2;
     }
     out[k] = static_cast<float>(std::sqrt(p));
   }
@@ -327,8 +328,11 @@ PaperSoundDb load_paper_database(const std::string& dir) {
   for (std::size_t i = 0; i < entries.size(); ++i) {
     Obj e(entries[i], json_reader::index_path(r.at("entries"), i));
     PaperDbEntry entry;
-    entry.constrained = e.has("constrained") && e.get("constrained").is_boolean() &&
-                        e.get("constrained").get<bool>();
+    if (e.has("constrained")) {
+      const json& c = e.get("constrained");
+      if (!c.is_boolean()) json_reader::fail(e.at("constrained"), "expected true or false");
+      entry.constrained = c.get<bool>();
+    }
     if (!entry.constrained) {
       entry.l_r = e.positive("l_r_cm", 0) / 100;
       entry.l_c = e.positive("l_c_cm", 0) / 100;

@@ -76,7 +76,7 @@ PaperRenderer::PaperRenderer(const PaperAnimation& anim, const PaperSoundDb* db,
     so.sample_rate = opt_.sample_rate;
     so.max_voices = opt_.max_voices;
     synth_ = std::make_unique<Synth>(*fb_, so);
-    block_frames_ = std::min<std::uint32_t>(256, fb_->max_frames());
+    block_frames_ = std::min<std::uint32_t>(1024, fb_->max_frames());  // >= one frame
     block_.resize(2 * block_frames_);
     amps_.resize(opt_.modal_modes);
   }
@@ -84,7 +84,7 @@ PaperRenderer::PaperRenderer(const PaperAnimation& anim, const PaperSoundDb* db,
   head_ = anim_.listener.position;
   const std::size_t frames = static_cast<std::size_t>(
       std::ceil((anim_.duration() + opt_.tail_seconds) * opt_.sample_rate));
-  out_.assign(2 * frames, 0.0f);
+  for (auto& ch : out_) ch.assign(frames, 0.0f);
   report_.audio_seconds = double(frames) / opt_.sample_rate;
 }
 
@@ -153,7 +153,7 @@ const PaperFrameAnalysis& PaperRenderer::step() {
 
 AudioBuffer PaperRenderer::finish() {
   const auto t = Clock::now();
-  const std::int64_t end = static_cast<std::int64_t>(out_.size() / 2);
+  const std::int64_t end = static_cast<std::int64_t>(out_[0].size());
   friction_.clear();
   for (auto& [key, v] : friction_voices_) v.speed = 0;
   if (synth_) render_modal_until(end);
@@ -162,7 +162,11 @@ AudioBuffer PaperRenderer::finish() {
   AudioBuffer a;
   a.sample_rate = static_cast<int>(opt_.sample_rate);
   a.channels = 2;
-  a.samples = std::move(out_);
+  a.samples.resize(2 * out_[0].size());
+  for (std::size_t t = 0; t < out_[0].size(); ++t) {
+    a.samples[2 * t] = out_[0][t];
+    a.samples[2 * t + 1] = out_[1][t];
+  }
   for (std::size_t i = 0; i < a.samples.size(); ++i)
     if (!std::isfinite(a.samples[i]))
       throw InternalError("paper synthesis produced a non-finite sample at frame " +
@@ -179,7 +183,7 @@ void PaperRenderer::play_crumple_clip(const PaperResonator& r, double scale, std
   const double a = disk_radius(r);
   // The clip was recorded from a sheet of the entry's size: (a / a_entry)^3 corrects it (Eq. 3).
   const double a_ref = e.constrained ? a : std::sqrt(e.l_r * e.l_c / 2 / kPi);
-  const std::int64_t frames = static_cast<std::int64_t>(out_.size() / 2);
+  const std::int64_t frames = static_cast<std::int64_t>(out_[0].size());
   for (int ear = 0; ear < 2; ++ear) {
     paths_scratch_.clear();
     dipole_paths(r.centroid, r.normal, a, a_ref, ears_[ear], anim_.obstacles, opt_.spatial,
@@ -189,8 +193,8 @@ void PaperRenderer::play_crumple_clip(const PaperResonator& r, double scale, std
       const float g = static_cast<float>(scale * p.gain);
       const std::int64_t n =
           std::min<std::int64_t>(static_cast<std::int64_t>(clip.size()), frames - start);
-      float* dst = out_.data() + 2 * start + ear;
-      for (std::int64_t i = 0; i < n; ++i) dst[2 * i] += g * clip[i];
+      float* dst = out_[ear].data() + start;  // planar: the loop vectorizes
+      for (std::int64_t i = 0; i < n; ++i) dst[i] += g * clip[i];
     }
   }
 }
@@ -220,7 +224,7 @@ void PaperRenderer::add_friction_source(const PaperEvent& ev, const PaperResonat
 }
 
 void PaperRenderer::render_friction_until(std::int64_t end) {
-  const std::int64_t frames = static_cast<std::int64_t>(out_.size() / 2);
+  const std::int64_t frames = static_cast<std::int64_t>(out_[0].size());
   constexpr std::size_t K = SpectralNoise::kBins;
   const double dw = 2 * kPi * opt_.sample_rate / double(SpectralNoise::kSize);
   while (friction_pos_ < end && friction_pos_ < frames) {
@@ -232,17 +236,28 @@ void PaperRenderer::render_friction_until(std::int64_t end) {
         if (paths.size() == 1) {  // no reflector: a flat factor
           const float g = static_cast<float>(s.weight * std::abs(paths[0].gain));
           for (std::size_t k = 0; k < K; ++k) m[k] += g * (*s.bins)[k];
-        } else {  // Eq. 6 per bin
-          for (std::size_t k = 0; k < K; ++k)
-            m[k] +=
-                static_cast<float>(s.weight * path_magnitude(paths, dw * double(k))) * (*s.bins)[k];
+        } else {  // Eq. 6 per bin; each path's phasor e^{i w_k R/c} turns by a fixed step
+          phasor_.assign(paths.size(), {1.0, 0.0});
+          step_.resize(paths.size());
+          for (std::size_t p = 0; p < paths.size(); ++p)
+            step_[p] = std::polar(1.0, dw * paths[p].delay);
+          for (std::size_t k = 0; k < K; ++k) {
+            std::complex<double> sum = 0;
+            for (std::size_t p = 0; p < paths.size(); ++p) {
+              sum += paths[p].gain * phasor_[p];
+              phasor_[p] *= step_[p];
+            }
+            m[k] += static_cast<float>(s.weight * std::abs(sum)) * (*s.bins)[k];
+          }
         }
       }
     }
     noise_->hop(mags_, hop_out_.data());
     const std::int64_t n = std::min<std::int64_t>(SpectralNoise::kHop, frames - friction_pos_);
-    float* dst = out_.data() + 2 * friction_pos_;
-    for (std::int64_t i = 0; i < 2 * n; ++i) dst[i] += hop_out_[i];
+    for (std::int64_t i = 0; i < n; ++i) {
+      out_[0][friction_pos_ + i] += hop_out_[2 * i];
+      out_[1][friction_pos_ + i] += hop_out_[2 * i + 1];
+    }
     friction_pos_ += SpectralNoise::kHop;
   }
 }
@@ -343,7 +358,7 @@ void PaperRenderer::touch_friction_voice(const PaperEvent& ev, const PaperResona
 }
 
 void PaperRenderer::render_modal_until(std::int64_t end) {
-  const std::int64_t frames = static_cast<std::int64_t>(out_.size() / 2);
+  const std::int64_t frames = static_cast<std::int64_t>(out_[0].size());
   const double click_gap = opt_.sample_rate / opt_.friction_click_rate;
   const double click_gain = opt_.modal_friction_gain;
   while (modal_pos_ < end && modal_pos_ < frames) {
@@ -373,8 +388,10 @@ void PaperRenderer::render_modal_until(std::int64_t end) {
     }
     synth_->render(n, block_.data());
     const std::int64_t keep = std::min<std::int64_t>(n, frames - modal_pos_);
-    float* dst = out_.data() + 2 * modal_pos_;
-    for (std::int64_t i = 0; i < 2 * keep; ++i) dst[i] += block_[i];
+    for (std::int64_t i = 0; i < keep; ++i) {
+      out_[0][modal_pos_ + i] += block_[2 * i];
+      out_[1][modal_pos_ + i] += block_[2 * i + 1];
+    }
     modal_pos_ = block_end;
     // Crumple voices whose burst has rung out give their slots back.
     for (std::size_t i = 0; i < crumple_voices_.size();) {

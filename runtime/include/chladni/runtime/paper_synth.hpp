@@ -120,7 +120,7 @@ class PaperRenderer {
   Vec3 head_;
   Rng rng_;
   std::uint32_t next_frame_ = 0;
-  std::vector<float> out_;  // interleaved stereo
+  std::array<std::vector<float>, 2> out_;  // left, right (planar until finish())
   PaperRenderReport report_;
   // Database friction.
   std::unique_ptr<SpectralNoise> noise_;
@@ -129,6 +129,7 @@ class PaperRenderer {
   std::map<const std::vector<float>*, std::vector<float>> hop_bins_;
   std::vector<float> mags_, hop_out_;
   std::vector<SoundPath> paths_scratch_;
+  std::vector<std::complex<double>> phasor_, step_;
   // Modal voices.
   std::unique_ptr<Synth> synth_;
   std::int64_t modal_pos_ = 0;
