@@ -31,7 +31,7 @@ double grid_distance(const PaperDbEntry& e, double l_r, double l_c) {
 
 template <class Usable>
 const PaperDbEntry& nearest(const PaperSoundDb& db, double l_r, double l_c, bool constrained,
-                            Usable usable, const char* what) {
+                            Usable usable, const std::string& surface) {
   const PaperDbEntry* best = nullptr;
   double best_d = std::numeric_limits<double>::infinity();
   for (const PaperDbEntry& e : db.entries) {
@@ -40,7 +40,11 @@ const PaperDbEntry& nearest(const PaperSoundDb& db, double l_r, double l_c, bool
     const double d = e.constrained ? 1e9 : grid_distance(e, l_r, l_c);  // last resort only
     if (d < best_d) best_d = d, best = &e;
   }
-  if (!best) throw InputError(std::string("the paper sound database has no ") + what);
+  if (!best)
+    throw InputError(surface.empty() ? "the paper sound database has no crumpling clips"
+                                     : "the paper sound database has no friction spectra for "
+                                       "surface '" +
+                                           surface + "'");
   return *best;
 }
 
@@ -126,7 +130,7 @@ std::string cm(double m) {
 const PaperDbEntry& PaperSoundDb::nearest_crumple(double l_r, double l_c, bool constrained) const {
   return nearest(
       *this, l_r, l_c, constrained, [](const PaperDbEntry& e) { return !e.crumple.empty(); },
-      "crumpling clips");
+      std::string());
 }
 
 const PaperDbEntry& PaperSoundDb::nearest_friction(const std::string& surface, double l_r,
@@ -137,7 +141,7 @@ const PaperDbEntry& PaperSoundDb::nearest_friction(const std::string& surface, d
         auto it = e.friction.find(surface);
         return it != e.friction.end() && !it->second.empty();
       },
-      ("friction spectra for surface '" + surface + "'").c_str());
+      surface);
 }
 
 bool PaperSoundDb::has_surface(const std::string& surface) const {
