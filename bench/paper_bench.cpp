@@ -70,103 +70,101 @@ int main(int argc, char** argv) {
     gpu = std::make_unique<runtime::GpuFilterbank>(std::make_shared<gpu::Context>(), go);
     std::printf("gpu: %s\n", gpu->name().c_str());
   }
+  // Each scenario and size once, for both tables (the 20k ones take a while to generate).
+  std::vector<std::pair<std::string, runtime::PaperScenario>> scenarios;
+  for (const std::string& name : runtime::paper_scenario_names())
+    for (std::uint32_t tris : sizes) {
+      runtime::PaperScenarioOptions o;
+      o.triangles = tris;
+      scenarios.emplace_back(name, runtime::make_paper_scenario(name, o));
+    }
   nlohmann::json rows = nlohmann::json::array();
   nlohmann::json synth_rows = nlohmann::json::array();
   std::printf("%-8s %9s %7s | %12s %12s %14s | %7s %10s\n", "scenario", "triangles", "frames",
               "mean ms", "max ms", "event-frame ms", "events", "resonators");
-  for (const std::string& name : runtime::paper_scenario_names()) {
-    for (std::uint32_t tris : sizes) {
-      runtime::PaperScenarioOptions o;
-      o.triangles = tris;
-      const runtime::PaperScenario s = runtime::make_paper_scenario(name, o);
-      const PaperAnimation& a = s.animation;
-      // Best of `repeat` passes per frame: the analysis is deterministic, the machine is not.
-      std::vector<double> best(a.frame_count(), 1e30);
-      std::size_t events = 0, resonators = 0;
-      std::vector<bool> has_event(a.frame_count(), false);
-      for (int r = 0; r < repeat; ++r) {
-        runtime::PaperAnalyzer an(a);
-        for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
-          const auto t0 = std::chrono::steady_clock::now();
-          const auto fa = an.analyze(f);
-          const double ms =
-              1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-          best[f] = std::min(best[f], ms);
-          if (r == 0) {
-            events += fa.events.size();
-            for (const auto& e : fa.events) resonators += e.resonators.size();
-            has_event[f] = !fa.events.empty();
-          }
+  for (const auto& [name, s] : scenarios) {
+    const PaperAnimation& a = s.animation;
+    // Best of `repeat` passes per frame: the analysis is deterministic, the machine is not.
+    std::vector<double> best(a.frame_count(), 1e30);
+    std::size_t events = 0, resonators = 0;
+    std::vector<bool> has_event(a.frame_count(), false);
+    for (int r = 0; r < repeat; ++r) {
+      runtime::PaperAnalyzer an(a);
+      for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
+        const auto t0 = std::chrono::steady_clock::now();
+        const auto fa = an.analyze(f);
+        const double ms =
+            1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        best[f] = std::min(best[f], ms);
+        if (r == 0) {
+          events += fa.events.size();
+          for (const auto& e : fa.events) resonators += e.resonators.size();
+          has_event[f] = !fa.events.empty();
         }
       }
-      double mean = 0, worst = 0, event_mean = 0;
-      std::size_t event_frames = 0;
-      for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
-        mean += best[f], worst = std::max(worst, best[f]);
-        if (has_event[f]) event_mean += best[f], ++event_frames;
-      }
-      mean /= a.frame_count();
-      event_mean = event_frames ? event_mean / double(event_frames) : 0;
-      std::printf("%-8s %9zu %7u | %12.3f %12.3f %14.3f | %7zu %10zu\n", name.c_str(),
-                  a.triangles.size(), a.frame_count(), mean, worst, event_mean, events, resonators);
-      rows.push_back({{"scenario", name},
-                      {"triangles", a.triangles.size()},
-                      {"frames", a.frame_count()},
-                      {"mean_ms", mean},
-                      {"max_ms", worst},
-                      {"event_frame_mean_ms", event_mean},
-                      {"events", events},
-                      {"resonators", resonators}});
     }
+    double mean = 0, worst = 0, event_mean = 0;
+    std::size_t event_frames = 0;
+    for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
+      mean += best[f], worst = std::max(worst, best[f]);
+      if (has_event[f]) event_mean += best[f], ++event_frames;
+    }
+    mean /= a.frame_count();
+    event_mean = event_frames ? event_mean / double(event_frames) : 0;
+    std::printf("%-8s %9zu %7u | %12.3f %12.3f %14.3f | %7zu %10zu\n", name.c_str(),
+                a.triangles.size(), a.frame_count(), mean, worst, event_mean, events, resonators);
+    rows.push_back({{"scenario", name},
+                    {"triangles", a.triangles.size()},
+                    {"frames", a.frame_count()},
+                    {"mean_ms", mean},
+                    {"max_ms", worst},
+                    {"event_frame_mean_ms", event_mean},
+                    {"events", events},
+                    {"resonators", resonators}});
   }
   // Analysis + synthesis per frame (best of `repeat` per frame) and the whole render.
   std::printf("\n%-8s %9s %-10s | %10s %10s | %8s %10s\n", "scenario", "triangles", "mode",
               "mean ms", "max ms", "x realtime", "voices");
-  for (const std::string& name : runtime::paper_scenario_names()) {
-    for (std::uint32_t tris : sizes) {
-      runtime::PaperScenarioOptions so;
-      so.triangles = tris;
-      const runtime::PaperScenario s = runtime::make_paper_scenario(name, so);
-      const PaperAnimation& a = s.animation;
-      std::vector<std::pair<std::string, runtime::Filterbank*>> modes = {{"database", nullptr},
-                                                                         {"modal-cpu", &cpu}};
-      if (gpu) modes.push_back({"modal-gpu", gpu.get()});
-      for (const auto& [mode, fb] : modes) {
-        runtime::PaperSynthOptions o;
-        o.mode = fb ? runtime::PaperSynthMode::Modal : runtime::PaperSynthMode::Database;
-        std::vector<double> best(a.frame_count(), 1e30);
-        double best_wall = 1e30, audio = 0;
-        std::uint32_t voices = 0;
-        for (int r = 0; r < repeat; ++r) {
-          const auto w0 = std::chrono::steady_clock::now();
-          runtime::PaperRenderer pr(a, &db, fb, o);
-          for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
-            const auto t0 = std::chrono::steady_clock::now();
-            pr.step();
-            best[f] = std::min(
-                best[f],
-                1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
-          }
-          pr.finish();
-          best_wall = std::min(
-              best_wall,
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
-          audio = pr.report().audio_seconds;
-          voices = pr.report().peak_modal_voices;
+  for (const auto& [name, s] : scenarios) {
+    const PaperAnimation& a = s.animation;
+    std::vector<std::pair<std::string, runtime::Filterbank*>> modes = {{"database", nullptr},
+                                                                       {"modal-cpu", &cpu}};
+    if (gpu) modes.push_back({"modal-gpu", gpu.get()});
+    for (const auto& [mode, fb] : modes) {
+      runtime::PaperSynthOptions o;
+      o.mode = fb ? runtime::PaperSynthMode::Modal : runtime::PaperSynthMode::Database;
+      std::vector<double> best(a.frame_count(), 1e30);
+      double best_wall = 1e30, audio = 0;
+      std::uint32_t voices = 0;
+      for (int r = 0; r < repeat; ++r) {
+        const auto w0 = std::chrono::steady_clock::now();
+        runtime::PaperRenderer pr(a, &db, fb, o);
+        for (std::uint32_t f = 0; f < a.frame_count(); ++f) {
+          const auto t0 = std::chrono::steady_clock::now();
+          pr.step();
+          best[f] = std::min(
+              best[f],
+              1e3 * std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         }
-        double mean = 0, worst = 0;
-        for (double b : best) mean += b, worst = std::max(worst, b);
-        mean /= a.frame_count();
-        std::printf("%-8s %9zu %-10s | %10.3f %10.3f | %8.0f %10u\n", name.c_str(),
-                    a.triangles.size(), mode.c_str(), mean, worst, audio / best_wall, voices);
-        synth_rows.push_back({{"scenario", name},
-                              {"triangles", a.triangles.size()},
-                              {"mode", mode},
-                              {"frame_mean_ms", mean},
-                              {"frame_max_ms", worst},
-                              {"realtime_factor", audio / best_wall},
-                              {"peak_modal_voices", voices}});
+        pr.finish();
+        best_wall =
+            std::min(best_wall,
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count());
+        audio = pr.report().audio_seconds;
+        voices = pr.report().peak_modal_voices;
       }
+      double mean = 0, worst = 0;
+      for (double b : best) mean += b, worst = std::max(worst, b);
+      mean /= a.frame_count();
+      std::printf("%-8s %9zu %-10s | %10.3f %10.3f | %8.0f %10u\n", name.c_str(),
+                  a.triangles.size(), mode.c_str(), mean, worst, audio / best_wall, voices);
+      synth_rows.push_back({{"scenario", name},
+                            {"triangles", a.triangles.size()},
+                            {"mode", mode},
+                            {"frame_mean_ms", mean},
+                            {"frame_max_ms", worst},
+                            {"realtime_factor", audio / best_wall},
+                            {"peak_modal_voices", voices}});
     }
   }
   if (!json_path.empty())

@@ -27,6 +27,13 @@ double disk_radius(const PaperResonator& r) {
   return std::sqrt(std::max(r.area, 1e-8) / kPi);
 }
 
+// The disk radius of the sheet an entry was recorded from (l_r x l_c/2): a sound is scaled by
+// (a / this)^3 (Eq. 3), as the recording already holds its own sheet's size. Constrained
+// entries have no size: the resonator's own radius, so no correction.
+double recorded_radius(const PaperDbEntry& e, double a) {
+  return e.constrained ? a : std::sqrt(e.l_r * e.l_c / 2 / kPi);
+}
+
 }  // namespace
 
 PaperSynthMode parse_paper_mode(const std::string& name) {
@@ -181,8 +188,7 @@ void PaperRenderer::play_crumple_clip(const PaperResonator& r, double scale, std
   const std::vector<float>& clip =
       e.crumple[rng_.index(static_cast<std::uint32_t>(e.crumple.size()))];
   const double a = disk_radius(r);
-  // The clip was recorded from a sheet of the entry's size: (a / a_entry)^3 corrects it (Eq. 3).
-  const double a_ref = e.constrained ? a : std::sqrt(e.l_r * e.l_c / 2 / kPi);
+  const double a_ref = recorded_radius(e, a);
   const std::int64_t frames = static_cast<std::int64_t>(out_[0].size());
   for (int ear = 0; ear < 2; ++ear) {
     paths_scratch_.clear();
@@ -216,7 +222,7 @@ void PaperRenderer::add_friction_source(const PaperEvent& ev, const PaperResonat
   s.bins = &hop_bins(spectra[rng_.index(static_cast<std::uint32_t>(spectra.size()))]);
   s.weight = ev.amplitude / db_->friction_reference_speed;  // linear in sliding speed (§5)
   const double a = disk_radius(r);
-  const double a_ref = e.constrained ? a : std::sqrt(e.l_r * e.l_c / 2 / kPi);
+  const double a_ref = recorded_radius(e, a);
   for (int ear = 0; ear < 2; ++ear)
     dipole_paths(r.centroid, r.normal, a, a_ref, ears_[ear], anim_.obstacles, opt_.spatial,
                  s.paths[ear]);
