@@ -18,11 +18,16 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const uint MPI = 32;      // modes per invocation
 layout(constant_id = 2) const uint CHANNELS = 1;  // 1 or 2
 layout(constant_id = 3) const uint ROWS_PER_GROUP = 8;
+// Driven slots (stochastic excitation): z[n] = p z[n-1] + a x_k[n], the input term added after
+// the pole product as in the CPU reference. A separate pipeline, so undriven banks pay nothing.
+layout(constant_id = 4) const bool DRIVEN = false;
 
 layout(std430, binding = 0) buffer Modes { vec4 modes[]; };  // (p.re, p.im, z.re, z.im)
 layout(std430, binding = 1) readonly buffer Gains { vec2 gains[]; };
 layout(std430, binding = 2) readonly buffer Excitations { uvec4 exc[]; };  // see above
 layout(std430, binding = 3) writeonly buffer Partials { float partial[]; };
+layout(std430, binding = 4) readonly buffer Drives { uvec4 drive[]; };  // stream, a.re, a.im bits
+layout(std430, binding = 5) readonly buffer Inputs { float inputs[]; };  // stream-major rows
 
 layout(push_constant) uniform Push {
   uint mode_count;  // slots [0, mode_count) are processed
@@ -34,6 +39,8 @@ layout(push_constant) uniform Push {
 const uint NONE = 0xffffffffu;
 
 float pr[MPI], pi[MPI], zr[MPI], zi[MPI], g0[MPI], g1[MPI];
+float ar[DRIVEN ? MPI : 1], ai[DRIVEN ? MPI : 1];
+uint src[DRIVEN ? MPI : 1];
 uint row_base;
 
 // First index in [0, exc_count) whose invocation is >= inv.
@@ -51,11 +58,16 @@ uint next_sample(uint next, uint stop) {
   return subgroupMin(next < stop ? (exc[next].y & 0xffffu) : NONE);
 }
 
-// z <- p z for every mode of this invocation.
-void step() {
+// z <- p z (+ a x[n] when driven) for every mode of this invocation.
+void step(uint n) {
   for (uint j = 0; j < MPI; ++j) {
     float r = pr[j] * zr[j] - pi[j] * zi[j];
     float i = pr[j] * zi[j] + pi[j] * zr[j];
+    if (DRIVEN) {
+      const float x = src[j] != NONE ? inputs[src[j] * pc.samples + n] : 0.0;
+      r += ar[j] * x;
+      i += ai[j] * x;
+    }
     zr[j] = r;
     zi[j] = i;
   }
@@ -89,6 +101,13 @@ void main() {
       const vec2 g = gains[s];
       pr[j] = m.x; pi[j] = m.y; zr[j] = m.z; zi[j] = m.w; g0[j] = g.x; g1[j] = g.y;
     }
+    if (DRIVEN) {
+      src[j] = NONE; ar[j] = 0.0; ai[j] = 0.0;
+      if (s < pc.mode_count) {
+        const uvec4 d = drive[s];
+        src[j] = d.x; ar[j] = uintBitsToFloat(d.y); ai[j] = uintBitsToFloat(d.z);
+      }
+    }
   }
   // This invocation's excitations: [next, stop), in offset order.
   const uint inv = gl_GlobalInvocationID.x;
@@ -102,12 +121,12 @@ void main() {
   while (n < pc.samples) {
     const uint seg_end = min(next_n, pc.samples);
     for (; n < seg_end; ++n) {  // hot loop: no excitation in [n, seg_end)
-      step();
+      step(n);
       emit(n);
     }
     if (n == pc.samples) break;
     // Sample n carries excitations of some invocation of the subgroup.
-    step();
+    step(n);
     while (next < stop && (exc[next].y & 0xffffu) == n) {
       const uint k = exc[next].y >> 16;
       const vec2 e = uintBitsToFloat(exc[next].zw);

@@ -69,6 +69,9 @@ CpuFilterbank::CpuFilterbank(const CpuFilterbankOptions& o)
   zi_.reset(aligned_floats(padded_));
   g0_.reset(aligned_floats(padded_));
   g1_.reset(aligned_floats(padded_));
+  ar_.reset(aligned_floats(padded_));
+  ai_.reset(aligned_floats(padded_));
+  src_.assign(padded_, kNoStream);
   const int threads = o.threads > 0
                           ? o.threads
                           : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
@@ -93,6 +96,21 @@ void CpuFilterbank::set_mode(uint32_t slot, std::complex<float> p, const float g
   zr_[slot] = zi_[slot] = 0.0f;
   g0_[slot] = gains[0];
   g1_[slot] = channels_ == 2 ? gains[1] : 0.0f;
+  set_input(slot, kNoStream, {0, 0});
+}
+
+void CpuFilterbank::set_pole(uint32_t slot, std::complex<float> p) {
+  if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
+  pr_[slot] = p.real();
+  pi_[slot] = p.imag();
+}
+
+void CpuFilterbank::set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) {
+  if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
+  driven_ += (stream != kNoStream) - (src_[slot] != kNoStream);
+  src_[slot] = stream;
+  ar_[slot] = stream == kNoStream ? 0.0f : gain.real();
+  ai_[slot] = stream == kNoStream ? 0.0f : gain.imag();
 }
 
 void CpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
@@ -126,6 +144,10 @@ void CpuFilterbank::run_task(void* self_ptr, int t) {
   a.exc_count = r[3] - r[2];
   a.frames = self->frames_;
   a.channels = self->channels_;
+  a.src = self->src_.data();
+  a.ar = self->ar_.get();
+  a.ai = self->ai_.get();
+  a.in = self->driven_ ? self->input_.samples : nullptr;
   a.out =
       self->task_out_.data() + static_cast<std::size_t>(t) * self->max_frames_ * self->channels_;
   // 64-byte aligned lane scratch.
@@ -139,8 +161,20 @@ void CpuFilterbank::run_task(void* self_ptr, int t) {
   }
 }
 
-void CpuFilterbank::process(std::span<const Excitation> excitations, uint32_t frames, float* out) {
+void CpuFilterbank::process(std::span<const Excitation> excitations, uint32_t frames, float* out,
+                            const DriveInput& input) {
   if (frames > max_frames_) throw std::invalid_argument("process: frames exceeds max_frames()");
+  if (driven_ && input.streams) {
+    if (!input.samples) throw std::invalid_argument("process: input streams without samples");
+    // A driven slot must name a row that exists: checked here, not in the hot loop.
+    for (uint32_t s = 0; s < high_water_; ++s) {
+      if (src_[s] != kNoStream && src_[s] >= input.streams) {
+        throw std::out_of_range("process: slot " + std::to_string(s) + " reads input stream " +
+                                std::to_string(src_[s]) + " of " + std::to_string(input.streams));
+      }
+    }
+  }
+  input_ = input.streams ? input : DriveInput{};
   if (excitations.size() > max_excitations_) {
     throw std::invalid_argument("process: more excitations than max_excitations()");
   }

@@ -10,7 +10,7 @@ namespace chladni::runtime::cpu {
 namespace {
 
 // S: a SIMD "ops" struct with type V, width W, load/store/set1/zero/add/mul/fmadd/fmsub.
-template <class S, int CH, int NV>
+template <class S, int CH, int NV, bool DRIVEN>
 void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Excitation* ex_end) {
   using V = typename S::V;
   constexpr int W = S::W;
@@ -25,11 +25,34 @@ void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Exci
     g0[v] = S::load(a.g0 + s);
     g1[v] = CH == 2 ? S::load(a.g1 + s) : S::zero();
   }
-  // z <- p z (Eq. of DESIGN.md), written as the GPU does: (pr zr - pi zi, pr zi + pi zr).
-  auto step = [&] {
+  // Driven tiles: input gains, and per lane the row of its stream (a zero row when undriven).
+  [[maybe_unused]] V ar[DRIVEN ? NV : 1], ai[DRIVEN ? NV : 1];
+  [[maybe_unused]] const float* row[DRIVEN ? T : 1];
+  if constexpr (DRIVEN) {
     for (int v = 0; v < NV; ++v) {
-      const V nr = S::fmsub(pr[v], zr[v], S::mul(pi[v], zi[v]));
-      const V ni = S::fmadd(pr[v], zi[v], S::mul(pi[v], zr[v]));
+      ar[v] = S::load(a.ar + t0 + v * W);
+      ai[v] = S::load(a.ai + t0 + v * W);
+    }
+    for (uint32_t l = 0; l < T; ++l) {
+      const uint32_t k = a.src[t0 + l];
+      row[l] = k == kNoStream ? nullptr : a.in + static_cast<std::size_t>(k) * a.frames;
+    }
+  }
+  // z <- p z (Eq. of DESIGN.md), written as the GPU does: (pr zr - pi zi, pr zi + pi zr).
+  // Driven: z <- p z + a x[n], the input term added after the pole product as on the GPU.
+  auto step = [&](uint32_t n) {
+    [[maybe_unused]] alignas(64) float x[DRIVEN ? T : 1];
+    if constexpr (DRIVEN) {
+      for (uint32_t l = 0; l < T; ++l) x[l] = row[l] ? row[l][n] : 0.0f;
+    }
+    for (int v = 0; v < NV; ++v) {
+      V nr = S::fmsub(pr[v], zr[v], S::mul(pi[v], zi[v]));
+      V ni = S::fmadd(pr[v], zi[v], S::mul(pi[v], zr[v]));
+      if constexpr (DRIVEN) {
+        const V xv = S::load(x + v * W);
+        nr = S::fmadd(ar[v], xv, nr);
+        ni = S::fmadd(ai[v], xv, ni);
+      }
       zr[v] = nr;
       zi[v] = ni;
     }
@@ -55,12 +78,12 @@ void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Exci
   while (n < a.frames) {
     const uint32_t stop = e != ex_end ? e->offset : a.frames;
     for (; n < stop; ++n) {  // the hot loop: no excitation in [n, stop)
-      step();
+      step(n);
       emit(n);
     }
     if (n == a.frames) break;
     // Sample n carries excitations: step, add them lane by lane, emit.
-    step();
+    step(n);
     alignas(64) float br[T], bi[T];
     for (int v = 0; v < NV; ++v) {
       S::store(br + v * W, zr[v]);
@@ -96,7 +119,16 @@ void run_range(const KernelArgs& a) {
     while (ex != ex_all_end && ex->slot < g0) ++ex;
     const Excitation* gend = ex;
     while (gend != ex_all_end && gend->slot < g0 + kGroup) ++gend;
-    for (uint32_t t0 = g0; t0 < g0 + kGroup; t0 += T) run_tile<S, CH, NV>(a, t0, ex, gend);
+    for (uint32_t t0 = g0; t0 < g0 + kGroup; t0 += T) {
+      bool driven = false;
+      if (a.in) {
+        for (uint32_t l = 0; l < T && !driven; ++l) driven = a.src[t0 + l] != kNoStream;
+      }
+      if (driven)
+        run_tile<S, CH, NV, true>(a, t0, ex, gend);
+      else
+        run_tile<S, CH, NV, false>(a, t0, ex, gend);
+    }
     ex = gend;
   }
   // Flush states far below audibility (denormals are slow and inaudible).

@@ -25,6 +25,12 @@ struct KernelArgs {
   int channels;  ///< 1 or 2
   float* out;    ///< frames * channels, overwritten with this range's sum
   float* lanes;  ///< scratch of frames * channels * 16 floats
+  /// Driven slots (nullptr `in`: none): stream per slot (kNoStream: undriven), complex input gain,
+  /// and the input rows, `frames` samples per stream.
+  const uint32_t* src;
+  const float* ar;
+  const float* ai;
+  const float* in;
 };
 
 using Kernel = void (*)(const KernelArgs&);

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstring>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "chladni/gpu/buffer.hpp"
 #include "chladni/gpu/context.hpp"
@@ -35,6 +37,9 @@ struct GpuFilterbank::Update {
   uint32_t slot, flags;
   float gain[2];
   float pz[4];
+  uint32_t stream;
+  float input[2];
+  uint32_t pad;
 };
 
 GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterbankOptions& o)
@@ -44,8 +49,9 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
       max_excitations_(o.max_excitations),
       high_water_(o.capacity),
       local_(o.workgroup_size),
-      mpi_(o.modes_per_invocation) {
-  static_assert(sizeof(Update) == 32, "matches apply_updates.comp");
+      mpi_(o.modes_per_invocation),
+      max_streams_(o.max_streams) {
+  static_assert(sizeof(Update) == 48, "matches apply_updates.comp");
   if (!ctx_) throw std::invalid_argument("GpuFilterbank needs a Vulkan context");
   if (capacity_ == 0) throw std::invalid_argument("filterbank capacity must be > 0");
   if (mpi_ == 0) mpi_ = ctx_->info().type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 32 : 4;
@@ -90,26 +96,49 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   max_updates_ = std::min(capacity_, 1u << 16);
   updates_ = std::make_unique<gpu::Buffer>(c, uint64_t{max_updates_} * sizeof(Update),
                                            gpu::Memory::HostVisible);
+  drives_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 16,
+                                          gpu::Memory::DeviceLocal);
+  const uint64_t input_bytes = uint64_t{max_streams_} * max_frames_ * sizeof(float);
+  if (input_bytes > lim.maxStorageBufferRange) {
+    throw gpu::Error("filterbank input streams exceed the device's storage buffer range");
+  }
+  // Mapped, so that inputs made on the host are written in place; a GpuInputStage writes it too.
+  inputs_ = std::make_unique<gpu::Buffer>(c, std::max<uint64_t>(input_bytes, 16),
+                                          gpu::Memory::HostVisible);
   modes_->zero();
   gains_->zero();
+  {
+    std::vector<uint32_t> none(uint64_t{groups} * group_modes * 4, 0);
+    for (std::size_t i = 0; i < none.size(); i += 4) none[i] = kNone;
+    drives_->upload(none.data(), none.size() * sizeof(uint32_t));
+  }
 
-  const gpu::SpecConstant fb_spec[] = {
-      {0, local_}, {1, mpi_}, {2, channels_}, {3, rows_per_group_}};
-  filterbank_ = std::make_unique<gpu::Pipeline>(c, std::span(k_filterbank_spv), 4,
-                                                sizeof(FilterbankPush), fb_spec);
-  filterbank_->bind(0, *modes_);
-  filterbank_->bind(1, *gains_);
-  filterbank_->bind(2, *excitations_);
-  filterbank_->bind(3, *scratch_);
+  auto make_filterbank = [&](bool driven) {
+    const gpu::SpecConstant spec[] = {
+        {0, local_}, {1, mpi_}, {2, channels_}, {3, rows_per_group_}, {4, driven ? 1u : 0u}};
+    auto p = std::make_unique<gpu::Pipeline>(c, std::span(k_filterbank_spv), 6,
+                                             sizeof(FilterbankPush), spec);
+    p->bind(0, *modes_);
+    p->bind(1, *gains_);
+    p->bind(2, *excitations_);
+    p->bind(3, *scratch_);
+    p->bind(4, *drives_);
+    p->bind(5, *inputs_);
+    return p;
+  };
+  filterbank_ = make_filterbank(false);
+  filterbank_driven_ = make_filterbank(true);
   reduce_ = std::make_unique<gpu::Pipeline>(c, std::span(k_reduce_spv), 2, sizeof(ReducePush));
   reduce_->bind(0, *scratch_);
   reduce_->bind(1, *result_);
-  apply_ = std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 3, sizeof(uint32_t));
+  apply_ = std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 4, sizeof(uint32_t));
   apply_->bind(0, *modes_);
   apply_->bind(1, *gains_);
   apply_->bind(2, *updates_);
+  apply_->bind(3, *drives_);
   seq_ = std::make_unique<gpu::Sequence>(c, 4);
   pending_index_.assign(capacity_, kNone);
+  stream_.assign(capacity_, kNone);
 }
 
 GpuFilterbank::~GpuFilterbank() = default;
@@ -125,7 +154,7 @@ GpuFilterbank::Update& GpuFilterbank::pending(uint32_t slot) {
   if (idx == kNone) {
     if (update_count_ == max_updates_) flush_updates();
     idx = update_count_++;
-    list[idx] = Update{slot, 0, {0, 0}, {0, 0, 0, 0}};
+    list[idx] = Update{slot, 0, {0, 0}, {0, 0, 0, 0}, kNone, {0, 0}, 0};
   }
   return list[idx];
 }
@@ -138,6 +167,28 @@ void GpuFilterbank::set_mode(uint32_t slot, std::complex<float> p, const float g
   u.pz[2] = u.pz[3] = 0.0f;
   u.gain[0] = gains[0];
   u.gain[1] = channels_ == 2 ? gains[1] : 0.0f;
+  set_input(slot, kNoStream, {0, 0});
+}
+
+void GpuFilterbank::set_pole(uint32_t slot, std::complex<float> p) {
+  Update& u = pending(slot);
+  u.flags |= 4u;
+  u.pz[0] = p.real();
+  u.pz[1] = p.imag();
+}
+
+void GpuFilterbank::set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) {
+  if (stream != kNoStream && stream >= max_streams_) {
+    throw std::out_of_range("filterbank input stream " + std::to_string(stream) +
+                            " exceeds max_streams " + std::to_string(max_streams_));
+  }
+  Update& u = pending(slot);
+  u.flags |= 8u;
+  u.stream = stream;
+  u.input[0] = stream == kNoStream ? 0.0f : gain.real();
+  u.input[1] = stream == kNoStream ? 0.0f : gain.imag();
+  driven_ += (stream != kNoStream) - (stream_[slot] != kNoStream);
+  stream_[slot] = stream;
 }
 
 void GpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
@@ -178,8 +229,28 @@ std::complex<float> GpuFilterbank::state(uint32_t slot) {
   return {m[2], m[3]};
 }
 
-void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t frames, float* out) {
+void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t frames, float* out,
+                            const DriveInput& input) {
   if (frames > max_frames_) throw std::invalid_argument("process: frames exceeds max_frames()");
+  if (input.streams > max_streams_) {
+    throw std::invalid_argument("process: more input streams than max_streams()");
+  }
+  if (input.streams && !input.samples && !stage_) {
+    throw std::invalid_argument("process: input streams without samples or a device stage");
+  }
+  const bool driven = driven_ > 0 && input.streams > 0;
+  if (driven) {  // rows past input.streams would hold stale samples
+    for (uint32_t s = 0; s < high_water_; ++s) {
+      if (stream_[s] != kNone && stream_[s] >= input.streams) {
+        throw std::out_of_range("process: slot " + std::to_string(s) + " reads input stream " +
+                                std::to_string(stream_[s]) + " of " +
+                                std::to_string(input.streams));
+      }
+    }
+  }
+  if (driven && input.samples) {
+    std::memcpy(inputs_->data(), input.samples, sizeof(float) * input.streams * frames);
+  }
   if (excitations.size() > max_excitations_) {
     throw std::invalid_argument("process: more excitations than max_excitations()");
   }
@@ -208,12 +279,16 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   seq_->begin();
   seq_->timestamp(0);
   record_updates();
+  if (driven && !input.samples) {
+    stage_->record(*seq_, frames);
+    seq_->barrier();
+  }
   if (groups == 0) {
     seq_->fill_zero(*result_);
     seq_->barrier();
   } else {
     const FilterbankPush fp{groups * group_modes, frames, ne, 0};
-    seq_->dispatch(*filterbank_, groups, &fp, sizeof(fp));
+    seq_->dispatch(driven ? *filterbank_driven_ : *filterbank_, groups, &fp, sizeof(fp));
     seq_->barrier();
     seq_->timestamp(1);
     // Tree reduction of the partial rows: rows -> ceil(rows/64) -> ... -> result.

@@ -37,12 +37,17 @@ class CpuFilterbank final : public Filterbank {
   int channels() const override { return channels_; }
   uint32_t max_frames() const override { return max_frames_; }
   uint32_t max_excitations() const override { return max_excitations_; }
+  uint32_t max_streams() const override { return kNoStream - 1; }
   int threads() const { return pool_->threads(); }
 
   void set_mode(uint32_t slot, std::complex<float> pole, const float gains[2]) override;
+  void set_pole(uint32_t slot, std::complex<float> pole) override;
+  void set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) override;
   void set_gains(uint32_t slot, const float gains[2]) override;
   void set_high_water(uint32_t slots) override;
-  void process(std::span<const Excitation> excitations, uint32_t frames, float* out) override;
+  using Filterbank::process;
+  void process(std::span<const Excitation> excitations, uint32_t frames, float* out,
+               const DriveInput& input) override;
   std::complex<float> state(uint32_t slot) override;
 
  private:
@@ -57,7 +62,10 @@ class CpuFilterbank final : public Filterbank {
   struct AlignedFree {
     void operator()(float* p) const;
   };
-  std::unique_ptr<float[], AlignedFree> pr_, pi_, zr_, zi_, g0_, g1_;
+  std::unique_ptr<float[], AlignedFree> pr_, pi_, zr_, zi_, g0_, g1_, ar_, ai_;
+  std::vector<uint32_t> src_;  // input stream per slot, kNoStream when undriven
+  uint32_t driven_ = 0;        // slots with a stream
+  DriveInput input_;
   std::vector<Excitation> sorted_;
   std::vector<float> task_out_, task_lanes_;
   std::vector<uint32_t> task_range_;  // per task: begin, end, exc_begin, exc_end

@@ -20,6 +20,17 @@ struct Excitation {
   float im;
 };
 
+/// Dense per-sample input for driven slots (stochastic excitation, issue 6): `streams` rows of
+/// `frames` samples each, row-major. A slot driven by stream k with gain a advances as
+/// z[n] = p z[n-1] + a x_k[n] (+ any impulse at n).
+struct DriveInput {
+  const float* samples = nullptr;  ///< streams * frames, or nullptr (see GpuFilterbank)
+  uint32_t streams = 0;
+};
+
+/// Stream index of an undriven slot.
+constexpr uint32_t kNoStream = 0xffffffffu;
+
 struct FilterbankTiming {
   double gpu_ms = 0;     ///< device time of the last process() (0 when unknown)
   double kernel_ms = 0;  ///< of which the filterbank kernel (the rest: updates, reduction)
@@ -37,8 +48,16 @@ class Filterbank {
   /// Largest number of excitations one process() call accepts.
   virtual uint32_t max_excitations() const = 0;
 
-  /// Starts a mode in `slot`: pole p, zero state, channel gains (gains[1] ignored in mono).
+  /// Largest number of input streams one process() call accepts.
+  virtual uint32_t max_streams() const = 0;
+
+  /// Starts a mode in `slot`: pole p, zero state, channel gains (gains[1] ignored in mono), and
+  /// no input stream.
   virtual void set_mode(uint32_t slot, std::complex<float> pole, const float gains[2]) = 0;
+  /// Changes a slot's pole, keeping its state (retuning a ringing resonance).
+  virtual void set_pole(uint32_t slot, std::complex<float> pole) = 0;
+  /// Drives a slot from input stream `stream` (< max_streams(), or kNoStream) with `gain`.
+  virtual void set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) = 0;
   /// Changes a slot's gains, keeping its state.
   virtual void set_gains(uint32_t slot, const float gains[2]) = 0;
   /// Silences a slot (pole, state and gains to zero).
@@ -51,7 +70,12 @@ class Filterbank {
 
   /// Advances by `frames` samples; `out` receives frames * channels() interleaved samples.
   /// Excitations may come in any order; their offsets must be < frames.
-  virtual void process(std::span<const Excitation> excitations, uint32_t frames, float* out) = 0;
+  void process(std::span<const Excitation> excitations, uint32_t frames, float* out) {
+    process(excitations, frames, out, DriveInput{});
+  }
+  /// Likewise, with the driven slots reading `input` (a slot's stream must be < input.streams).
+  virtual void process(std::span<const Excitation> excitations, uint32_t frames, float* out,
+                       const DriveInput& input) = 0;
 
   /// Reads back one slot's state (for tests and diagnostics; may be slow).
   virtual std::complex<float> state(uint32_t slot) = 0;

@@ -25,6 +25,17 @@ struct GpuFilterbankOptions {
   /// per-sample subgroup reduction), 4 on GPUs (keeps enough invocations in flight).
   uint32_t modes_per_invocation = 0;
   uint64_t scratch_budget_bytes = 256ull << 20;
+  /// Input streams for driven slots (stream rows of max_frames floats on the device).
+  uint32_t max_streams = 0;
+};
+
+/// Records device work that fills GpuFilterbank::input_buffer() for one process() call (a
+/// stochastic excitation generated on the GPU), run in the same submission just before the
+/// filterbank kernel.
+class GpuInputStage {
+ public:
+  virtual ~GpuInputStage() = default;
+  virtual void record(gpu::Sequence& sequence, uint32_t frames) = 0;
 };
 
 class GpuFilterbank final : public Filterbank {
@@ -38,12 +49,22 @@ class GpuFilterbank final : public Filterbank {
   int channels() const override { return channels_; }
   uint32_t max_frames() const override { return max_frames_; }
   uint32_t max_excitations() const override { return max_excitations_; }
+  uint32_t max_streams() const override { return max_streams_; }
   gpu::Context& context() { return *ctx_; }
+  /// Device rows of the input streams, stream k at float offset k * frames of each call.
+  gpu::Buffer& input_buffer() { return *inputs_; }
+  /// A stage that writes the inputs on the device; process() calls with input.samples == nullptr
+  /// and input.streams > 0 then record it instead of uploading (nullptr: none).
+  void set_input_stage(GpuInputStage* stage) { stage_ = stage; }
 
   void set_mode(uint32_t slot, std::complex<float> pole, const float gains[2]) override;
+  void set_pole(uint32_t slot, std::complex<float> pole) override;
+  void set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) override;
   void set_gains(uint32_t slot, const float gains[2]) override;
   void set_high_water(uint32_t slots) override;
-  void process(std::span<const Excitation> excitations, uint32_t frames, float* out) override;
+  using Filterbank::process;
+  void process(std::span<const Excitation> excitations, uint32_t frames, float* out,
+               const DriveInput& input) override;
   std::complex<float> state(uint32_t slot) override;
   FilterbankTiming last_timing() const override { return timing_; }
 
@@ -56,9 +77,13 @@ class GpuFilterbank final : public Filterbank {
 
   std::shared_ptr<gpu::Context> ctx_;
   uint32_t capacity_, channels_, max_frames_, max_excitations_, high_water_;
-  uint32_t local_, mpi_, rows_per_group_, max_updates_;
+  uint32_t local_, mpi_, rows_per_group_, max_updates_, max_streams_;
   std::unique_ptr<gpu::Buffer> modes_, gains_, excitations_, scratch_, result_, updates_;
-  std::unique_ptr<gpu::Pipeline> filterbank_, reduce_, apply_;
+  std::unique_ptr<gpu::Buffer> drives_, inputs_;
+  std::unique_ptr<gpu::Pipeline> filterbank_, filterbank_driven_, reduce_, apply_;
+  std::vector<uint32_t> stream_;  // per slot, host mirror of the drive's stream
+  uint32_t driven_ = 0;
+  GpuInputStage* stage_ = nullptr;
   std::unique_ptr<gpu::Sequence> seq_;
   std::vector<uint32_t> pending_index_;  // per slot: index into the update list, or ~0
   uint32_t update_count_ = 0;
