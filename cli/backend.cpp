@@ -28,6 +28,7 @@ std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& r) {
       o.capacity = r.capacity;
       o.channels = r.channels;
       o.max_frames = r.max_frames;
+      o.max_streams = r.max_streams;
       return std::make_unique<runtime::GpuFilterbank>(ctx, o);
     } catch (const gpu::NoDeviceError& e) {
       std::fprintf(stderr, "warning: %s; using the CPU filterbank instead\n", e.what());

@@ -19,6 +19,7 @@ struct BackendRequest {
   int threads = 0;
   std::string isa = "auto";  ///< cpu only: auto | scalar | avx2 | avx512
   uint32_t max_frames = 4096;
+  uint32_t max_streams = 0;  ///< input streams of driven slots (PhISEM voices)
 };
 
 std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& request);

@@ -12,5 +12,6 @@ void add_materials(CLI::App& app);
 void add_info(CLI::App& app);
 void add_radiate(CLI::App& app);
 void add_paper(CLI::App& app);
+void add_shake(CLI::App& app);
 
 }  // namespace chladni::cli

@@ -1,0 +1,214 @@
+// chladni shake INSTRUMENT -o OUT.wav: PhISEM particle sounds (maraca, rain, gravel in a bowl...)
+// on the CPU or GPU filterbank, with the instrument's resonances or a soundbank's modes.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <numbers>
+
+#include "backend.hpp"
+#include "chladni/core/audio_file.hpp"
+#include "chladni/core/error.hpp"
+#include "chladni/core/soundbank.hpp"
+#include "chladni/runtime/filterbank.hpp"
+#include "chladni/runtime/render.hpp"
+#include "chladni/runtime/shaker_bank.hpp"
+#include "chladni/runtime/transfer_gains.hpp"
+#include "commands.hpp"
+
+namespace chladni::cli {
+namespace {
+
+struct ShakeArgs {
+  std::string instrument, output, bank, backend = "cpu", format = "float", listener = "0,0,1";
+  double duration = 2.0, rate = 4.0, particles = 0, energy = 0.5, impulse = 1e-3;
+  double normalize_db = NAN;
+  int sample_rate = 48000, threads = 0;
+  uint32_t voices = 1, block = 256, contacts = 8;
+  uint64_t seed = 1;
+  bool list = false, quiet = false;
+};
+
+Vec3 parse_vec3(const std::string& s, const char* what) {
+  Vec3 v{};
+  char tail = 0;
+  if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 || !is_finite(v))
+    throw InputError(std::string(what) + " must be X,Y,Z in metres, got '" + s + "'");
+  return v;
+}
+
+// Per-mode pressure gains at the listener (object frame): transfer where its fit is usable, else
+// the compact-source estimate spread over distance (as render does).
+void listener_gains(const ModalModel& model, runtime::ObjectModes& object, const Vec3& listener) {
+  const double r = std::max(norm(listener), 0.1);
+  std::vector<float> xfer;
+  if (model.transfer) {
+    runtime::TransferTable table;
+    table.add(*model.transfer);
+    runtime::ListenerFrame frame;
+    const Vec3 at[1] = {listener};
+    frame.update(table, at);
+    xfer.resize(table.mode_count());
+    runtime::transfer_gains(table, frame, xfer);
+  }
+  for (std::size_t i = 0; i < object.modes.size(); ++i) {
+    object.modes[i].gain = !xfer.empty() && model.transfer->usable(i)
+                               ? xfer[i]
+                               : static_cast<float>(object.modes[i].gain / r);
+  }
+}
+
+void list_instruments() {
+  std::printf("%-12s %-9s %-5s %s\n", "instrument", "particles", "res", "what (source)");
+  for (const runtime::PhisemPreset& p : runtime::phisem_presets())
+    std::printf("%-12s %-9g %-5zu %s (%s)\n", p.name.c_str(), p.objects, p.resonances.size(),
+                p.title.c_str(), p.source.c_str());
+}
+
+void run_shake(const ShakeArgs& a) {
+  if (a.list) return list_instruments();
+  if (a.instrument.empty()) throw InputError("name an instrument (chladni shake --list)");
+  if (a.output.empty()) throw InputError("-o OUT.wav is required");
+  const runtime::PhisemPreset& preset = runtime::phisem_preset(a.instrument);
+  if (a.sample_rate < 8000 || a.sample_rate > 384000)
+    throw InputError("--sample-rate must lie in [8000, 384000]");
+  if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
+  if (a.voices == 0 || a.voices > 4096) throw InputError("--voices must lie in [1, 4096]");
+  if (!(std::isfinite(a.particles) && a.particles >= 0 && a.particles <= 1e6))
+    throw InputError("--particles must lie in [0, 1e6] (0: the instrument's own)");
+  if (!(std::isfinite(a.duration) && a.duration > 0 && a.duration <= 3600))
+    throw InputError("--duration must lie in (0, 3600] s");
+  SampleFormat format = SampleFormat::Float32;
+  if (a.format == "pcm24")
+    format = SampleFormat::Pcm24;
+  else if (a.format == "pcm16")
+    format = SampleFormat::Pcm16;
+  else if (a.format != "float")
+    throw InputError("--format must be float, pcm24 or pcm16");
+  const double fs = a.sample_rate;
+  const int channels = a.voices > 1 ? 2 : 1;
+
+  // The voices: the instrument's resonances, or the soundbank's modes at the listener.
+  std::unique_ptr<ModalModel> model;
+  runtime::ObjectModes object;
+  std::vector<runtime::ShakerVoice> voices;
+  if (!a.bank.empty()) {
+    const Soundbank bank = read_soundbank(a.bank);
+    model = std::make_unique<ModalModel>(to_modal_model(bank, "object"));
+    std::vector<std::size_t> kept;
+    for (std::size_t i = 0; i < model->mode_count(); ++i)
+      if (model->damped_omega(i) < std::numbers::pi * fs) kept.push_back(i);
+    keep_modes(*model, kept);
+    if (model->mode_count() == 0)
+      throw InputError(a.bank + ": no mode lies below the Nyquist frequency at " +
+                       std::to_string(a.sample_rate) + " Hz");
+    object = runtime::object_modes(*model);
+    listener_gains(*model, object, parse_vec3(a.listener, "--listener"));
+  }
+  for (uint32_t v = 0; v < a.voices; ++v) {
+    runtime::ShakerVoice sv = a.bank.empty()
+                                  ? runtime::instrument_voice(preset, fs, a.particles)
+                                  : runtime::object_voice(preset, object, fs, a.impulse, a.contacts,
+                                                          a.seed + v, a.particles);
+    if (channels == 2) {  // constant-power spread of the voices from left to right
+      const double theta = (double(v) + 0.5) / a.voices * std::numbers::pi / 2;
+      sv.pan[0] = static_cast<float>(std::cos(theta));
+      sv.pan[1] = static_cast<float>(std::sin(theta));
+    }
+    voices.push_back(std::move(sv));
+  }
+  std::size_t slots = 0;
+  for (const auto& v : voices) slots += v.resonances.size();
+
+  BackendRequest req;
+  req.backend = a.backend;
+  req.channels = channels;
+  req.threads = a.threads;
+  req.capacity = static_cast<uint32_t>(std::max<std::size_t>(slots, 64));
+  req.max_frames = std::max<uint32_t>(a.block, 256);
+  req.max_streams = a.voices;
+  auto fb = make_filterbank(req);
+  const bool gpu = fb->name().rfind("gpu", 0) == 0;  // make_filterbank may have fallen back
+  runtime::ShakerBankOptions bo;
+  bo.sample_rate = fs;
+  bo.max_voices = a.voices;
+  bo.seed = a.seed;
+  bo.excitation = gpu ? runtime::ExcitationBackend::Gpu : runtime::ExcitationBackend::Cpu;
+  runtime::ShakerBank bank(*fb, bo);
+  for (const auto& v : voices) bank.add_voice(v);
+
+  // Shake over all but the last quarter second (at most a quarter of the sound): a tail rings.
+  const double until = std::max(a.duration - std::min(0.25, a.duration / 4), 1e-9);
+  const auto shakes =
+      runtime::regular_shakes(a.voices, a.rate, until, static_cast<float>(a.energy));
+  const auto t0 = std::chrono::steady_clock::now();
+  AudioBuffer audio = runtime::render_shaker(bank, channels, fs, shakes, a.duration, a.block);
+  const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  double peak = 0;
+  for (float x : audio.samples) {
+    if (!std::isfinite(x)) throw InternalError("shake: the synthesis produced a non-finite sample");
+    peak = std::max(peak, double(std::abs(x)));
+  }
+  if (!std::isnan(a.normalize_db) && peak > 0) {
+    const double g = std::pow(10.0, a.normalize_db / 20.0) / peak;
+    for (float& x : audio.samples) x = static_cast<float>(x * g);
+  }
+  write_wav(a.output, audio, format);
+  if (!a.quiet) {
+    uint64_t collisions = 0;
+    for (uint32_t v = 0; v < bank.voice_count(); ++v) collisions += bank.state(int(v)).collisions;
+    std::printf("%s: %u voice%s x %zu resonances%s, %zu shakes, %llu collisions\n",
+                preset.title.c_str(), a.voices, a.voices == 1 ? "" : "s",
+                voices[0].resonances.size(), a.bank.empty() ? "" : (" (" + a.bank + ")").c_str(),
+                shakes.size(), static_cast<unsigned long long>(collisions));
+    std::printf("backend %s, excitation on the %s; %.3f s in %.3f s (%.1fx real time); peak %.4g\n",
+                fb->name().c_str(), bank.backend_name().c_str(), a.duration, wall,
+                wall > 0 ? a.duration / wall : 0.0, peak);
+    std::printf("wrote %s\n", a.output.c_str());
+  }
+  if (std::isnan(a.normalize_db) && peak > 1.0 && format != SampleFormat::Float32)
+    std::fprintf(stderr, "warning: peak %.3g exceeds full scale and was clipped; use --normalize\n",
+                 peak);
+}
+
+}  // namespace
+
+void add_shake(CLI::App& app) {
+  auto a = std::make_shared<ShakeArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "shake", "Particle sounds (PhISEM): shakers, rain, gravel on a soundbank's object");
+  cmd->add_option("instrument", a->instrument, "Instrument (--list shows them)");
+  cmd->add_option("-o,--output", a->output, "Output WAV file");
+  cmd->add_flag("--list", a->list, "List the instruments and their sources");
+  cmd->add_option("--duration", a->duration, "Seconds of sound")->capture_default_str();
+  cmd->add_option("--shakes-per-second", a->rate, "Shakes per second and voice")
+      ->capture_default_str();
+  cmd->add_option("--energy", a->energy, "Energy each shake adds (0-1]")->capture_default_str();
+  cmd->add_option("--particles", a->particles, "Particle count (0: the instrument's)");
+  cmd->add_option("--voices", a->voices, "Simultaneous voices (stereo when > 1)")
+      ->capture_default_str();
+  cmd->add_option("--bank", a->bank,
+                  "Soundbank whose modes resonate (particles strike random surface points)");
+  cmd->add_option("--contacts", a->contacts, "Surface points a bank voice's shakes move between")
+      ->capture_default_str();
+  cmd->add_option("--impulse", a->impulse, "N*s per unit of excitation on a bank's object")
+      ->capture_default_str();
+  cmd->add_option("--listener", a->listener, "Listener X,Y,Z (m, object frame) for --bank")
+      ->capture_default_str();
+  cmd->add_option("--seed", a->seed, "Random seed (same seed, same sound on either backend)")
+      ->capture_default_str();
+  cmd->add_option("--backend", a->backend, "Filterbank and excitation: cpu or gpu")
+      ->capture_default_str();
+  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")->capture_default_str();
+  cmd->add_option("--sample-rate", a->sample_rate, "Hz")->capture_default_str();
+  cmd->add_option("--block", a->block, "Frames per filterbank call")->capture_default_str();
+  cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)");
+  cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")
+      ->capture_default_str();
+  cmd->add_flag("-q,--quiet", a->quiet, "Print nothing but errors");
+  cmd->callback([a] { run_shake(*a); });
+}
+
+}  // namespace chladni::cli
