@@ -107,8 +107,9 @@ void run_render(const RenderArgs& a) {
     throw InputError("--format must be float, pcm24 or pcm16");
 
   if (!a.quiet)
-    std::printf("scene %s: %zu objects, %zu impacts, %zu moves\n", a.scene.c_str(),
-                scene.objects.size(), scene.events.size(), scene.moves.size());
+    std::printf("scene %s: %zu objects, %zu impacts, %zu moves, %zu shakes\n", a.scene.c_str(),
+                scene.objects.size(), scene.events.size(), scene.moves.size(),
+                scene.shakes.size());
   std::vector<std::unique_ptr<ModalModel>> models;
   std::vector<runtime::ObjectModes> objects;
   resolve_objects(scene, models, objects, a.quiet);
@@ -120,16 +121,20 @@ void run_render(const RenderArgs& a) {
   req.channels = scene.channels;
   req.threads = a.threads;
   req.isa = a.isa;
-  req.capacity = a.max_modes
-                     ? a.max_modes
-                     : static_cast<uint32_t>(std::clamp<std::size_t>(total_modes, 1024, 1u << 20));
+  const uint32_t budget =
+      a.max_modes ? a.max_modes
+                  : static_cast<uint32_t>(std::clamp<std::size_t>(total_modes, 1024, 1u << 20));
+  // Shake events' voices sit in slots of their own above the impacts' budget.
+  const runtime::SceneShakers shakers = runtime::scene_shakers(scene, objects);
+  req.capacity = budget + shakers.slots;
+  req.max_streams = static_cast<uint32_t>(shakers.first_event.size());
   req.max_frames = std::max<uint32_t>(a.block, 256);
   auto fb = make_filterbank(req);
 
   runtime::RenderOptions ro;
   ro.block = a.block;
   ro.synth.retire_db = a.retire_db;
-  ro.synth.max_modes = req.capacity;
+  ro.synth.max_modes = budget;
   std::size_t transfer_modes = 0;
   for (const auto& o : objects) transfer_modes += o.transfer ? o.modes.size() : 0;
   if (a.backend == "gpu" && transfer_modes >= ro.gpu_gain_modes) {

@@ -131,6 +131,29 @@ ImpactEvent parse_event(Obj o, const Scene& scene) {
   return ev;
 }
 
+ShakeEvent parse_shake(Obj o, const Scene& scene) {
+  ShakeEvent ev;
+  ev.json_path = o.path();
+  o.string("type");
+  ev.time = o.number("time");
+  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
+  ev.object = find_object(o, scene);
+  ev.instrument = o.string("instrument");
+  ev.energy = o.number("energy", 0.5);
+  if (!(ev.energy > 0 && ev.energy <= 1)) fail(o.at("energy"), "must lie in (0, 1]");
+  ev.particles = o.non_negative("particles", 0.0);
+  if (ev.particles > 1e6) fail(o.at("particles"), "must be <= 1e6");
+  if (o.has("resonate")) {
+    const std::string r = o.string("resonate");
+    if (r != "object" && r != "instrument")
+      fail(o.at("resonate"), "must be 'object' or 'instrument', got '" + r + "'");
+    ev.resonate_object = r == "object";
+  }
+  ev.impulse = o.positive("impulse", 1e-3);
+  o.done();
+  return ev;
+}
+
 }  // namespace
 
 Vec3 rotate(const Quat& q, const Vec3& v) {
@@ -194,14 +217,19 @@ Scene parse_scene(const json& j, const std::string& base_dir) {
       s.events.push_back(parse_event(Obj(events[i], path), s));
     else if (type == "move" || type == "listener")
       s.moves.push_back(parse_move(Obj(events[i], path), s, type == "listener"));
+    else if (type == "shake")
+      s.shakes.push_back(parse_shake(Obj(events[i], path), s));
     else
-      fail(peek.at("type"), "unknown event type '" + type + "' (known: impact, move, listener)");
+      fail(peek.at("type"),
+           "unknown event type '" + type + "' (known: impact, move, listener, shake)");
   }
   root.done();
   std::stable_sort(s.events.begin(), s.events.end(),
                    [](const ImpactEvent& a, const ImpactEvent& b) { return a.time < b.time; });
   std::stable_sort(s.moves.begin(), s.moves.end(),
                    [](const MoveEvent& a, const MoveEvent& b) { return a.time < b.time; });
+  std::stable_sort(s.shakes.begin(), s.shakes.end(),
+                   [](const ShakeEvent& a, const ShakeEvent& b) { return a.time < b.time; });
   for (const MoveEvent& m : s.moves) {
     if (m.object) continue;
     const Vec3 f = m.forward.value_or(s.listener.forward), u = m.up.value_or(s.listener.up);

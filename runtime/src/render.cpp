@@ -7,7 +7,9 @@
 #include <thread>
 
 #include "chladni/core/error.hpp"
+#include "chladni/runtime/gpu_filterbank.hpp"
 #include "chladni/runtime/impact.hpp"
+#include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/thread_pool.hpp"
 #include "chladni/runtime/transfer_gains.hpp"
 
@@ -16,8 +18,60 @@ namespace {
 
 // Spherical spreading relative to 1 m, clamped so an object at the listener stays finite.
 constexpr double kMinDistance = 0.1;
+// Surface points each shaken object's particles move between.
+constexpr std::size_t kShakeContacts = 8;
+
+bool same_voice(const ShakeEvent& a, const ShakeEvent& b) {
+  return a.object == b.object && a.instrument == b.instrument &&
+         a.resonate_object == b.resonate_object && a.particles == b.particles &&
+         a.impulse == b.impulse;
+}
+
+// The voice of a shake event: the object's modes driven by the instrument's particles, or the
+// instrument's own resonances.
+ShakerVoice shake_voice(const ShakeEvent& ev, const ObjectModes& obj, double fs, uint64_t seed) {
+  try {
+    const PhisemPreset& preset = phisem_preset(ev.instrument);
+    if (!ev.resonate_object) return instrument_voice(preset, fs, ev.particles);
+    if (obj.model && obj.model->has_geometry())
+      return object_voice(preset, obj, fs, ev.impulse, kShakeContacts, seed, ev.particles);
+    // Inline modes carry their pressure per N*s; a model without geometry its 1 / omega_d.
+    ShakerVoice v;
+    v.name = preset.name;
+    v.excitation = phisem_params(preset, fs, ev.particles);
+    for (std::size_t i = 0; i < obj.modes.size(); ++i) {
+      const ModeSpec& m = obj.modes[i];
+      const double per_ns = obj.inline_modes ? (*obj.inline_modes)[i].amplitude
+                            : m.omega_d > 0  ? 1.0 / m.omega_d
+                                             : 0.0;
+      v.resonances.push_back(
+          {m.omega_d, m.decay, {static_cast<float>(per_ns * ev.impulse), 0.0f}, m.gain, 0, 1});
+    }
+    return v;
+  } catch (const InputError& e) {
+    throw InputError(ev.json_path + ": " + e.what());
+  }
+}
 
 }  // namespace
+
+SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& objects) {
+  SceneShakers out;
+  for (std::size_t e = 0; e < scene.shakes.size(); ++e) {
+    const ShakeEvent& ev = scene.shakes[e];
+    int v = 0;
+    while (v < static_cast<int>(out.first_event.size()) &&
+           !same_voice(scene.shakes[out.first_event[v]], ev))
+      ++v;
+    if (v == static_cast<int>(out.first_event.size())) {
+      out.first_event.push_back(e);
+      out.slots += static_cast<uint32_t>(
+          shake_voice(ev, objects.at(ev.object), scene.sample_rate, 1).resonances.size());
+    }
+    out.voice.push_back(v);
+  }
+  return out;
+}
 
 ObjectModes object_modes(const ModalModel& model) {
   model.validate();
@@ -84,6 +138,28 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
   SynthOptions so = options.synth;
   so.sample_rate = fs;
   so.max_voices = std::max<uint32_t>(so.max_voices, static_cast<uint32_t>(objects.size()));
+  // Shake events: their voices take the slots above the synth's budget.
+  const SceneShakers shakers = scene_shakers(scene, objects);
+  std::unique_ptr<ShakerBank> bank;
+  if (!shakers.first_event.empty()) {
+    if (fb.capacity() <= shakers.slots)
+      throw InternalError("render: the filterbank has no room for the scene's shakers");
+    const uint32_t room = fb.capacity() - shakers.slots;
+    so.max_modes = so.max_modes ? std::min(so.max_modes, room) : room;
+    so.reserved_end = so.max_modes + shakers.slots;
+    ShakerBankOptions bo;
+    bo.sample_rate = fs;
+    bo.first_slot = so.max_modes;
+    bo.max_voices = static_cast<uint32_t>(shakers.first_event.size());
+    bo.seed = options.seed;
+    bo.excitation =
+        dynamic_cast<GpuFilterbank*>(&fb) ? ExcitationBackend::Gpu : ExcitationBackend::Cpu;
+    bank = std::make_unique<ShakerBank>(fb, bo);
+    for (std::size_t v = 0; v < shakers.first_event.size(); ++v) {
+      const ShakeEvent& ev = scene.shakes[shakers.first_event[v]];
+      bank->add_voice(shake_voice(ev, objects[ev.object], fs, options.seed + v));
+    }
+  }
   Synth synth(fb, so);
 
   std::vector<Synth::VoiceId> voices;
@@ -148,11 +224,25 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
                                           : static_cast<float>(objects[k].modes[i].gain * spread);
       }
       synth.set_mode_gains(voices[k], gains);
+      float pan[2] = {1.0f, 1.0f};
       if (scene.channels == 2) {
         const double s = r > 1e-9 && rn > 0 ? std::clamp(dot(d, right) / (r * rn), -1.0, 1.0) : 0.0;
         const double theta = (s + 1.0) * std::numbers::pi / 4.0;  // constant-power pan
-        synth.set_pan(voices[k], static_cast<float>(std::cos(theta)),
-                      static_cast<float>(std::sin(theta)));
+        pan[0] = static_cast<float>(std::cos(theta));
+        pan[1] = static_cast<float>(std::sin(theta));
+        synth.set_pan(voices[k], pan[0], pan[1]);
+      }
+      // Shakers on this object: its mode gains, or plain spreading for an instrument's own.
+      for (std::size_t v = 0; bank && v < shakers.first_event.size(); ++v) {
+        const ShakeEvent& ev = scene.shakes[shakers.first_event[v]];
+        if (ev.object != k) continue;
+        if (ev.resonate_object) {
+          bank->set_gains(static_cast<int>(v), gains, pan[0], pan[1]);
+        } else {
+          const std::vector<float> flat(phisem_preset(ev.instrument).resonances.size(),
+                                        static_cast<float>(spread));
+          bank->set_gains(static_cast<int>(v), flat, pan[0], pan[1]);
+        }
       }
     }
     ++rep.gain_updates;
@@ -161,7 +251,23 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
   };
   update_gains();
 
-  const double last_event = scene.events.empty() ? 0.0 : scene.events.back().time;
+  double last_event = scene.events.empty() ? 0.0 : scene.events.back().time;
+  if (!scene.shakes.empty()) {
+    // A shaken voice sounds while its energy lasts and then rings with its slowest resonance.
+    double ring = 0;
+    for (std::size_t v = 0; v < shakers.first_event.size(); ++v) {
+      const ShakeEvent& ev = scene.shakes[shakers.first_event[v]];
+      const PhisemParams p = phisem_params(phisem_preset(ev.instrument), fs, ev.particles);
+      double slowest = 1e9;
+      for (const ShakerResonance& r : shake_voice(ev, objects[ev.object], fs, 1).resonances)
+        slowest = std::min(slowest, std::max(r.decay, 1e-3));
+      const double energy_s = p.system_decay < 1
+                                  ? std::log(kPhisemMinEnergy) / std::log(p.system_decay) / fs
+                                  : options.max_tail;
+      ring = std::max(ring, energy_s + std::log(1e5) / slowest);  // to -100 dB
+    }
+    last_event = std::max(last_event, scene.shakes.back().time + std::min(ring, options.max_tail));
+  }
   const uint64_t limit = static_cast<uint64_t>(
       std::ceil((scene.duration ? *scene.duration : last_event + options.max_tail) * fs));
   AudioBuffer audio;
@@ -171,7 +277,7 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
                         scene.channels);
   std::vector<float> buf(static_cast<std::size_t>(block) * scene.channels);
   std::vector<std::complex<float>> amps;
-  std::size_t next = 0, next_move = 0;
+  std::size_t next = 0, next_move = 0, next_shake = 0;
   uint64_t t = 0;
   while (t < limit) {
     uint32_t frames = static_cast<uint32_t>(std::min<uint64_t>(block, limit - t));
@@ -210,14 +316,27 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
       synth.excite(voices[ev.object], amps, static_cast<uint32_t>(at - t));
       ++next;
     }
-    synth.render(frames, buf.data());
+    DriveInput drive;
+    if (bank) {
+      for (; next_shake < scene.shakes.size(); ++next_shake) {
+        const ShakeEvent& ev = scene.shakes[next_shake];
+        const uint64_t at = static_cast<uint64_t>(std::ceil(ev.time * fs));
+        if (at >= t + frames) break;
+        bank->shake(shakers.voice[next_shake], static_cast<float>(ev.energy),
+                    static_cast<uint32_t>(at - t));
+      }
+      drive = bank->prepare(frames);
+    }
+    synth.render(frames, buf.data(), drive);
+    if (bank) bank->finish(frames);
     rep.max_active_modes = std::max(rep.max_active_modes, synth.active_modes());
     audio.samples.insert(audio.samples.end(), buf.begin(), buf.begin() + frames * scene.channels);
     t += frames;
     if (options.progress && (t / block) % 256 == 0) options.progress(double(t) / double(limit));
     // Without a duration, stop once every event is played and everything has rung out.
     if (!scene.duration && next == scene.events.size() && next_move == scene.moves.size() &&
-        synth.active_modes() == 0 && double(t) / fs >= last_event) {
+        next_shake == scene.shakes.size() && synth.active_modes() == 0 &&
+        double(t) / fs >= last_event) {
       break;
     }
   }

@@ -225,6 +225,14 @@ bool ShakerBank::shake(int voice, float amount, uint32_t offset) {
   return true;
 }
 
+void ShakerBank::set_gains(int voice, std::span<const float> gains, float left, float right) {
+  Voice& v = voices_.at(static_cast<std::size_t>(voice));
+  for (std::size_t i = 0; i < v.res.size() && i < gains.size(); ++i) {
+    const float g[2] = {gains[i] * left, gains[i] * right};
+    fb_.set_gains(v.first_slot + static_cast<uint32_t>(i), g);
+  }
+}
+
 PhisemState& ShakerBank::state_ref(int voice) {
   return gpu_ ? gpu_->state_data()[voice] : states_[voice];
 }

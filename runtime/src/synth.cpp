@@ -227,10 +227,10 @@ void Synth::stop_voice(VoiceId id) {
   v.alive = false;
 }
 
-void Synth::render(uint32_t frames, float* out) {
+void Synth::render(uint32_t frames, float* out, const DriveInput& drive) {
   while (high_water_ > 0 && group_used_[high_water_ / kGroup - 1] == 0) high_water_ -= kGroup;
-  fb_.set_high_water(high_water_);
-  fb_.process(std::span(pending_.data(), pending_count_), frames, out);
+  fb_.set_high_water(std::max(high_water_, opt_.reserved_end));
+  fb_.process(std::span(pending_.data(), pending_count_), frames, out, drive);
   pending_count_ = 0;
   now_ += frames;
   // Retire a round-robin share of the resident range (each slot is visited within ~8 renders).

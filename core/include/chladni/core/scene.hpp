@@ -74,6 +74,21 @@ struct MoveEvent {
   std::optional<Vec3> forward, up;  ///< listener
 };
 
+/// Particles shaken against an object (PhISEM, runtime/phisem.hpp): the instrument's particle
+/// process drives the object's modes ("gravel in a bowl"), or, with resonate = instrument, the
+/// instrument's own resonances placed at the object. Shakes with the same object, instrument,
+/// resonance choice and particle count share one voice.
+struct ShakeEvent {
+  std::string json_path;
+  double time = 0;
+  std::size_t object = 0;
+  std::string instrument;
+  double energy = 0.5;   ///< (0, 1]
+  double particles = 0;  ///< 0: the instrument's own count
+  bool resonate_object = true;
+  double impulse = 1e-3;  ///< N*s per unit of excitation on the object's surface
+};
+
 struct Scene {
   int sample_rate = 48000;
   int channels = 2;
@@ -83,6 +98,7 @@ struct Scene {
   std::vector<SceneObject> objects;
   std::vector<ImpactEvent> events;  ///< sorted by time
   std::vector<MoveEvent> moves;     ///< sorted by time
+  std::vector<ShakeEvent> shakes;   ///< sorted by time
 };
 
 /// Parses a scene from JSON; `base_dir` resolves relative file names. Throws InputError whose

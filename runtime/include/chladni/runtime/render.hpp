@@ -40,6 +40,16 @@ ObjectModes object_modes(const std::vector<InlineMode>& modes);
 void impact_amplitudes(const ObjectModes& object, const ImpactEvent& event, double delay,
                        std::vector<std::complex<float>>& out);
 
+/// The shaker voices a scene's shake events need: one per (object, instrument, resonance choice,
+/// particle count, impulse); `voice[e]` is scene.shakes[e]'s. Validates the instruments
+/// (InputError naming the event's JSON path).
+struct SceneShakers {
+  std::vector<std::size_t> first_event;  ///< per voice: the event that defines it
+  std::vector<int> voice;                ///< per shake event
+  uint32_t slots = 0;                    ///< filterbank slots of all the voices
+};
+SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& objects);
+
 struct RenderOptions {
   uint32_t block = 256;    ///< frames per filterbank call
   double max_tail = 60.0;  ///< s after the last event when the scene gives no duration
@@ -49,6 +59,7 @@ struct RenderOptions {
   /// with transfer (null: always on the CPU).
   std::shared_ptr<gpu::Context> gain_device;
   std::size_t gpu_gain_modes = 20000;
+  uint64_t seed = 1;  ///< shake events' random streams
 };
 
 struct RenderReport {

@@ -77,6 +77,9 @@ class ShakerBank {
   /// Adds `amount` (0-1) of energy to a voice at sample `offset` of the next block. Returns false
   /// (and drops it) when the block's shake list is full or the input is invalid.
   bool shake(int voice, float amount, uint32_t offset);
+  /// New output gains of a voice's resonances (`gains` per resonance, times the pan), keeping
+  /// their states: a listener or object moved.
+  void set_gains(int voice, std::span<const float> gains, float left, float right);
 
   /// Renders `frames` (<= the filterbank's max_frames()) through the filterbank, this bank alone.
   void render(uint32_t frames, float* out);

@@ -26,6 +26,9 @@ struct SynthOptions {
   uint32_t max_modes = 0;   ///< mode budget; 0: the filterbank's capacity
   double retire_db = -100;  ///< retire a mode this far below its peak envelope
   uint32_t max_voices = 1024;
+  /// Slots [max_modes, reserved_end) belong to another user of the filterbank (a ShakerBank):
+  /// the synth never takes them and keeps them in the processed range.
+  uint32_t reserved_end = 0;
 };
 
 struct SynthStats {
@@ -50,8 +53,9 @@ class Synth {
   /// Silences and forgets the voice; its slots are freed at once.
   void stop_voice(VoiceId voice);
 
-  /// Renders `frames` (<= max_frames()) interleaved frames into `out`.
-  void render(uint32_t frames, float* out);
+  /// Renders `frames` (<= max_frames()) interleaved frames into `out`; `drive` feeds the
+  /// filterbank's driven slots (a ShakerBank's prepare()).
+  void render(uint32_t frames, float* out, const DriveInput& drive = {});
 
   uint32_t max_frames() const { return fb_.max_frames(); }
   uint32_t pending_excitations() const { return static_cast<uint32_t>(pending_count_); }
