@@ -278,3 +278,57 @@ TEST(CliRadiate, BadInputNamesFileAndLine) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("boundary edges"), std::string::npos) << r.output;
 }
+
+TEST(CliShake, WritesTheInstrumentAndTheSameSoundOnBothBackends) {
+  const std::string cpu = chladni::test::temp_path("chladni_shake_cpu.wav"),
+                    gpu = chladni::test::temp_path("chladni_shake_gpu.wav");
+  const Result r =
+      run("shake tambourine -o " + cpu + " --duration 1 --shakes-per-second 3 --seed 4");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("collisions"), std::string::npos) << r.output;
+  const Result g = run("shake tambourine -o " + gpu +
+                       " --duration 1 --shakes-per-second 3 --seed 4 --backend gpu");
+  ASSERT_EQ(g.code, 0) << g.output;
+  const chladni::AudioBuffer a = chladni::read_audio(cpu), b = chladni::read_audio(gpu);
+  EXPECT_EQ(a.sample_rate, 48000);
+  EXPECT_EQ(a.channels, 1);
+  ASSERT_EQ(a.frames(), 48000u);
+  ASSERT_EQ(b.frames(), a.frames());
+  const double peak = chladni::test::max_abs(a.samples);
+  EXPECT_GT(peak, 0.0);
+  EXPECT_LT(chladni::test::max_diff(a.samples, b.samples), 1e-4 * peak);
+  // Several voices are spread over a stereo field.
+  const Result v = run("shake maraca -o " + cpu + " --duration 0.5 --voices 3 --quiet");
+  ASSERT_EQ(v.code, 0) << v.output;
+  EXPECT_EQ(chladni::read_audio(cpu).channels, 2);
+  EXPECT_NE(run("shake --list").output.find("sleighbells"), std::string::npos);
+}
+
+TEST(CliShake, ParticlesOnASoundbankAndBadInputExitWith2) {
+  const std::string bank = chladni::test::temp_path("chladni_shake_bar.chbank");
+  const std::string out = chladni::test::temp_path("chladni_shake_bank.wav");
+  ASSERT_EQ(
+      run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank + " --no-transfer --quiet")
+          .code,
+      0);
+  const Result r = run("shake gravel -o " + out + " --bank " + bank + " --duration 0.5");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find(bank), std::string::npos) << r.output;
+  EXPECT_GT(chladni::test::max_abs(chladni::read_audio(out).samples), 0.0);
+
+  const Result unknown = run("shake kazoo -o " + out);
+  EXPECT_EQ(unknown.code, 2);
+  EXPECT_NE(unknown.output.find("unknown instrument 'kazoo' (known: maraca"), std::string::npos)
+      << unknown.output;
+  const Result nan = run("shake maraca -o " + out + " --duration nan");
+  EXPECT_EQ(nan.code, 2);
+  EXPECT_NE(nan.output.find("--duration"), std::string::npos) << nan.output;
+  EXPECT_EQ(run("shake maraca -o " + out + " --particles -4").code, 2);
+  EXPECT_EQ(run("shake maraca -o " + out + " --shakes-per-second 0").code, 2);
+  EXPECT_EQ(run("shake maraca -o " + out + " --energy 3").code, 2);
+  const std::string junk = chladni::test::write_temp("chladni_junk.chbank", "not a soundbank");
+  const Result bad = run("shake gravel -o " + out + " --bank " + junk);
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.output.find(junk), std::string::npos) << bad.output;
+  EXPECT_EQ(run("shake maraca").code, 2);  // no output file
+}

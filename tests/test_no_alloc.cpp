@@ -9,6 +9,7 @@
 #include <numbers>
 
 #include "chladni/runtime/cpu_filterbank.hpp"
+#include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/synth.hpp"
 
 namespace {
@@ -69,4 +70,34 @@ TEST(Synth, RenderAndExciteDoNotAllocate) {
   g_count = false;
   EXPECT_EQ(g_allocs.load(), 0);
   EXPECT_GT(synth.stats().stolen, 0u);
+}
+
+TEST(ShakerBank, ShakeRenderAndSharedSynthDoNotAllocate) {
+  // A synth and a shaker bank share the filterbank, as render_scene does.
+  CpuFilterbank fb({.capacity = 4096, .channels = 2, .threads = 2});
+  Synth synth(fb, {.sample_rate = kFs, .max_modes = 2048, .reserved_end = 2048 + 64});
+  ShakerBank bank(fb, {.sample_rate = kFs, .first_slot = 2048, .max_voices = 8});
+  for (const char* name : {"maraca", "tambourine", "sleighbells", "water"})
+    bank.add_voice(instrument_voice(phisem_preset(name), kFs));
+  std::vector<ModeSpec> modes;
+  for (int i = 0; i < 500; ++i) modes.push_back(mode(80 + 11 * i, 4.0));
+  const auto v = synth.start_voice(modes);
+  std::vector<std::complex<float>> amp(modes.size(), {1.0f, 0.0f});
+  std::vector<float> out(256 * 2), gains(5, 0.7f);
+  bank.shake(0, 0.5f, 0);
+  synth.render(256, out.data(), bank.prepare(256));  // warm-up
+  bank.finish(256);
+  g_allocs = 0;
+  g_count = true;
+  for (int b = 0; b < 200; ++b) {
+    for (int k = 0; k < 4; ++k) bank.shake(k, 0.3f, static_cast<uint32_t>((b * 37 + k) % 256));
+    if (b % 50 == 0) synth.excite(v, amp, 10);
+    bank.set_gains(2, gains, 0.5f, 0.8f);
+    const DriveInput in = bank.prepare(256);
+    synth.render(256, out.data(), in);
+    bank.finish(256);
+  }
+  g_count = false;
+  EXPECT_EQ(g_allocs.load(), 0);
+  EXPECT_GT(bank.state(0).collisions, 0u);
 }

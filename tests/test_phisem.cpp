@@ -7,10 +7,12 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <vector>
 
 #include "chladni/core/error.hpp"
+#include "chladni/core/scene.hpp"
 #include "chladni/gpu/buffer.hpp"
 #include "chladni/precompute/analytic_bar.hpp"
 #include "chladni/runtime/cpu_filterbank.hpp"
@@ -311,4 +313,72 @@ TEST(Phisem, ObjectVoiceDrivesTheModesThroughTheContactShapes) {
   bare.normals.clear();
   EXPECT_THROW(object_voice(phisem_preset("gravel"), object_modes(bare), 48000, 1e-3, 1, 1),
                InputError);
+}
+
+TEST(Phisem, SceneShakeEventsRenderOnBothBackendsAndNameBadInput) {
+  const nlohmann::json j = nlohmann::json::parse(R"({
+    "sample_rate": 48000, "channels": 2, "duration": 1.5,
+    "objects": [
+      {"name": "bar", "position": [0.3, 1, 0], "bar": {"length": 0.3}},
+      {"name": "cup", "position": [-0.5, 1, 0],
+       "modes": [{"frequency": 900, "decay": 8, "amplitude": 0.2}]}
+    ],
+    "events": [
+      {"time": 0.0, "type": "shake", "object": "bar", "instrument": "gravel", "energy": 0.8},
+      {"time": 0.3, "type": "shake", "object": "bar", "instrument": "gravel", "energy": 0.5},
+      {"time": 0.2, "type": "shake", "object": "cup", "instrument": "coins"},
+      {"time": 0.5, "type": "shake", "object": "cup", "instrument": "maraca",
+       "resonate": "instrument"},
+      {"time": 0.7, "type": "impact", "object": "cup", "impulse": 0.01}
+    ]})");
+  const Scene scene = parse_scene(j, ".");
+  ASSERT_EQ(scene.shakes.size(), 4u);
+  ModalModel bar_model = precompute::analytic_bar(scene.objects[0].bar);
+  bar_model.name = "bar";
+  std::vector<ObjectModes> objects = {object_modes(bar_model),
+                                      object_modes(scene.objects[1].modes)};
+  const SceneShakers shakers = scene_shakers(scene, objects);
+  ASSERT_EQ(shakers.first_event.size(), 3u);  // the two gravel shakes share a voice
+  EXPECT_EQ(shakers.voice[0], shakers.voice[2]);  // sorted by time: gravel, coins, gravel
+  EXPECT_EQ(shakers.slots, bar_model.mode_count() + 1 + 1);
+  const uint32_t cap = 2048 + shakers.slots;
+  RenderOptions ro;
+  ro.synth.max_modes = 2048;
+  CpuFilterbank cpu({.capacity = cap, .channels = 2, .threads = 2});
+  const AudioBuffer a = render_scene(scene, objects, cpu, ro);
+  const double peak = max_abs(a.samples);
+  ASSERT_GT(peak, 0.0);
+  // The shakes sound before the impact at 0.7 s.
+  std::vector<float> before(a.samples.begin(), a.samples.begin() + 2 * 33600);
+  EXPECT_GT(max_abs(before), 0.05 * peak);
+  if (auto ctx = test::gpu_context()) {
+    GpuFilterbank gpu(ctx, {.capacity = cap, .channels = 2, .max_streams = 3});
+    const AudioBuffer b = render_scene(scene, objects, gpu, ro);
+    EXPECT_LT(max_diff(a.samples, b.samples), 1e-4 * peak);
+  }
+  // Bad input names the event.
+  auto error_of = [](const std::string& event) {
+    nlohmann::json s = nlohmann::json::parse(
+        R"({"objects": [{"name": "cup", "modes": [{"frequency": 900, "decay": 8, "amplitude": 1}]}]})");
+    s["events"] = nlohmann::json::array({nlohmann::json::parse(event)});
+    try {
+      const Scene sc = parse_scene(s, ".");
+      scene_shakers(sc, {object_modes(sc.objects[0].modes)});
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  EXPECT_EQ(error_of(R"({"time": 0, "type": "shake", "object": "cup", "instrument": "maraca",
+                         "energy": 2})"),
+            "$.events[0].energy: must lie in (0, 1]");
+  EXPECT_EQ(error_of(R"({"time": 0, "type": "shake", "object": "cup", "instrument": "maraca",
+                         "resonate": "bowl"})"),
+            "$.events[0].resonate: must be 'object' or 'instrument', got 'bowl'");
+  EXPECT_NE(error_of(R"({"time": 0, "type": "shake", "object": "cup", "instrument": "kazoo"})")
+                .find("$.events[0]: unknown instrument 'kazoo'"),
+            std::string::npos);
+  EXPECT_NE(error_of(R"({"time": 0, "type": "shake", "object": "cup"})")
+                .find("missing required field 'instrument'"),
+            std::string::npos);
 }
