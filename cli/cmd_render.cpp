@@ -108,8 +108,7 @@ void run_render(const RenderArgs& a) {
 
   if (!a.quiet)
     std::printf("scene %s: %zu objects, %zu impacts, %zu moves, %zu shakes\n", a.scene.c_str(),
-                scene.objects.size(), scene.events.size(), scene.moves.size(),
-                scene.shakes.size());
+                scene.objects.size(), scene.events.size(), scene.moves.size(), scene.shakes.size());
   std::vector<std::unique_ptr<ModalModel>> models;
   std::vector<runtime::ObjectModes> objects;
   resolve_objects(scene, models, objects, a.quiet);

@@ -134,6 +134,7 @@ void run_shake(const ShakeArgs& a) {
   bo.sample_rate = fs;
   bo.max_voices = a.voices;
   bo.seed = a.seed;
+  bo.threads = a.threads;
   bo.excitation = gpu ? runtime::ExcitationBackend::Gpu : runtime::ExcitationBackend::Cpu;
   runtime::ShakerBank bank(*fb, bo);
   for (const auto& v : voices) bank.add_voice(v);

@@ -60,11 +60,18 @@ uint next_sample(uint next, uint stop) {
 
 // z <- p z (+ a x[n] when driven) for every mode of this invocation.
 void step(uint n) {
+  // A voice's modes are consecutive slots, so an invocation's modes mostly share a stream: load
+  // each stream's sample once (undriven modes have zero gains and read stream NONE as 0).
+  uint cur = NONE;
+  float x = 0.0;
   for (uint j = 0; j < MPI; ++j) {
     float r = pr[j] * zr[j] - pi[j] * zi[j];
     float i = pr[j] * zi[j] + pi[j] * zr[j];
     if (DRIVEN) {
-      const float x = src[j] != NONE ? inputs[src[j] * pc.samples + n] : 0.0;
+      if (src[j] != cur && src[j] != NONE) {
+        cur = src[j];
+        x = inputs[cur * pc.samples + n];
+      }
       r += ar[j] * x;
       i += ai[j] * x;
     }

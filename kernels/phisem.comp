@@ -49,6 +49,12 @@ void main() {
   }
   uint next = lo;
   const uint row = v * pc.frames;
+  const bool shaken = next < pc.shake_count && shakes[next].x == v;
+  if (!shaken && st.energy == 0.0 && st.level == 0.0 && st.x1 == 0.0 && st.x2 == 0.0) {
+    for (uint n = 0; n < pc.frames; ++n) inputs[row + n] = 0.0;  // silent stays silent
+    states[v].counter = st.counter + pc.frames;
+    return;
+  }
   for (uint n = 0; n < pc.frames; ++n) {
     while (next < pc.shake_count && shakes[next].x == v && shakes[next].y == n) {
       energy = min(1.0, energy + uintBitsToFloat(shakes[next].z));

@@ -25,31 +25,44 @@ void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Exci
     g0[v] = S::load(a.g0 + s);
     g1[v] = CH == 2 ? S::load(a.g1 + s) : S::zero();
   }
-  // Driven tiles: input gains, and per lane the row of its stream (a zero row when undriven).
+  // Driven tiles: input gains, and per lane the row of its stream (nullptr when undriven).
+  // Usually every driven lane of a tile reads one stream (a voice's modes are consecutive): then
+  // one broadcast per sample replaces the per-lane gather (undriven lanes have zero gains).
   [[maybe_unused]] V ar[DRIVEN ? NV : 1], ai[DRIVEN ? NV : 1];
   [[maybe_unused]] const float* row[DRIVEN ? T : 1];
+  [[maybe_unused]] const float* shared = nullptr;
   if constexpr (DRIVEN) {
     for (int v = 0; v < NV; ++v) {
       ar[v] = S::load(a.ar + t0 + v * W);
       ai[v] = S::load(a.ai + t0 + v * W);
     }
+    bool uniform = true;
     for (uint32_t l = 0; l < T; ++l) {
       const uint32_t k = a.src[t0 + l];
       row[l] = k == kNoStream ? nullptr : a.in + static_cast<std::size_t>(k) * a.frames;
+      if (row[l]) {
+        if (shared && row[l] != shared) uniform = false;
+        shared = row[l];
+      }
     }
+    if (!uniform) shared = nullptr;
   }
   // z <- p z (Eq. of DESIGN.md), written as the GPU does: (pr zr - pi zi, pr zi + pi zr).
   // Driven: z <- p z + a x[n], the input term added after the pole product as on the GPU.
   auto step = [&](uint32_t n) {
     [[maybe_unused]] alignas(64) float x[DRIVEN ? T : 1];
+    [[maybe_unused]] V xs = S::zero();
     if constexpr (DRIVEN) {
-      for (uint32_t l = 0; l < T; ++l) x[l] = row[l] ? row[l][n] : 0.0f;
+      if (shared)
+        xs = S::set1(shared[n]);
+      else
+        for (uint32_t l = 0; l < T; ++l) x[l] = row[l] ? row[l][n] : 0.0f;
     }
     for (int v = 0; v < NV; ++v) {
       V nr = S::fmsub(pr[v], zr[v], S::mul(pi[v], zi[v]));
       V ni = S::fmadd(pr[v], zi[v], S::mul(pi[v], zr[v]));
       if constexpr (DRIVEN) {
-        const V xv = S::load(x + v * W);
+        const V xv = shared ? xs : S::load(x + v * W);
         nr = S::fmadd(ar[v], xv, nr);
         ni = S::fmadd(ai[v], xv, ni);
       }

@@ -8,6 +8,7 @@ struct Scalar {
   static constexpr int W = 1;
   static V load(const float* p) { return *p; }
   static void store(float* p, V v) { *p = v; }
+  static V set1(float x) { return x; }
   static V zero() { return 0.0f; }
   static V add(V a, V b) { return a + b; }
   static V mul(V a, V b) { return a * b; }

@@ -49,6 +49,11 @@ uint32_t phisem_key(uint64_t seed, uint32_t index) {
 
 void phisem_generate(const PhisemParams& p, PhisemState& st, std::span<const Shake> shakes,
                      uint32_t frames, float* out) {
+  if (shakes.empty() && st.energy == 0.0f && st.level == 0.0f && st.x1 == 0.0f && st.x2 == 0.0f) {
+    std::fill(out, out + frames, 0.0f);  // a silent voice stays silent (as the loop would)
+    st.counter += frames;
+    return;
+  }
   float energy = st.energy, level = st.level, x1 = st.x1, x2 = st.x2;
   uint32_t collisions = st.collisions;
   std::size_t next = 0;

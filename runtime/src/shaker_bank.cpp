@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <numbers>
+#include <thread>
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/random.hpp"
@@ -151,6 +152,10 @@ ShakerBank::ShakerBank(Filterbank& fb, const ShakerBankOptions& o)
     backend_name_ = "gpu";
   } else {
     states_.reserve(o.max_voices);
+    const int threads =
+        o.threads > 0 ? o.threads : std::max(1, int(std::thread::hardware_concurrency()));
+    pool_ = std::make_unique<ThreadPool>(threads);
+    tasks_ = threads == 1 ? 1 : 4 * threads;  // small tasks even out voices of unequal work
     backend_name_ = "cpu";
   }
 }
@@ -242,15 +247,14 @@ PhisemState ShakerBank::state(int voice) const {
 }
 
 DriveInput ShakerBank::prepare(uint32_t frames) {
+  if (frames == 0) return DriveInput{};
   const uint32_t nv = voice_count();
-  // Shakes past this block's end are dropped with the rest of the list: offsets were checked
-  // against max_frames, and a block is never longer.
+  // A shake queued for a later sample than this (shorter) block has lands on its last sample.
   Shake* sh = shakes_.data();
+  for (std::size_t k = 0; k < shake_count_; ++k) sh[k].offset = std::min(sh[k].offset, frames - 1);
   std::sort(sh, sh + shake_count_, [](const Shake& a, const Shake& b) {
     return a.voice != b.voice ? a.voice < b.voice : a.offset < b.offset;
   });
-  std::size_t end = shake_count_;
-  while (end > 0 && sh[end - 1].offset >= frames) --end;  // defensive: offsets beyond the block
   // A shake moves an object voice's contact to a random surface point.
   for (std::size_t k = 0; k < shake_count_; ++k) {
     if (k > 0 && sh[k].voice == sh[k - 1].voice) continue;
@@ -268,7 +272,6 @@ DriveInput ShakerBank::prepare(uint32_t frames) {
     uint32_t* dst = gpu_->shake_data();
     uint32_t count = 0;
     for (std::size_t k = 0; k < shake_count_; ++k) {
-      if (sh[k].offset >= frames) continue;
       uint32_t bits;
       std::memcpy(&bits, &sh[k].amount, 4);
       const uint32_t e[4] = {sh[k].voice, sh[k].offset, bits, 0};
@@ -278,19 +281,28 @@ DriveInput ShakerBank::prepare(uint32_t frames) {
     shake_count_ = 0;
     return DriveInput{nullptr, nv};
   }
-  std::size_t k = 0;
-  for (uint32_t i = 0; i < nv; ++i) {
-    std::size_t e = k;
-    while (e < shake_count_ && sh[e].voice == i) ++e;
-    std::size_t valid = k;
-    while (valid < e && sh[valid].offset < frames) ++valid;
-    phisem_generate(params_[i], states_[i], std::span<const Shake>(sh + k, valid - k), frames,
-                    input_.data() + std::size_t(i) * frames);
-    k = e;
-  }
-  (void)end;
+  frames_ = frames;
+  pool_->run(&ShakerBank::generate_task, this, tasks_);
   shake_count_ = 0;
   return DriveInput{input_.data(), nv};
+}
+
+void ShakerBank::generate_task(void* self_ptr, int task) {
+  auto* self = static_cast<ShakerBank*>(self_ptr);
+  const uint32_t nv = self->voice_count(), frames = self->frames_;
+  const uint32_t v0 = static_cast<uint32_t>(uint64_t{nv} * task / self->tasks_);
+  const uint32_t v1 = static_cast<uint32_t>(uint64_t{nv} * (task + 1) / self->tasks_);
+  const Shake* sh = self->shakes_.data();
+  const Shake* end = sh + self->shake_count_;
+  const Shake* k =
+      std::lower_bound(sh, end, v0, [](const Shake& s, uint32_t v) { return s.voice < v; });
+  for (uint32_t i = v0; i < v1; ++i) {
+    const Shake* e = k;
+    while (e != end && e->voice == i) ++e;
+    phisem_generate(self->params_[i], self->states_[i], std::span<const Shake>(k, e), frames,
+                    self->input_.data() + std::size_t(i) * frames);
+    k = e;
+  }
 }
 
 void ShakerBank::retune(Voice& v, uint32_t index, const PhisemState& st, uint32_t frames) {

@@ -20,6 +20,7 @@
 #include "chladni/core/audio_file.hpp"
 #include "chladni/runtime/filterbank.hpp"
 #include "chladni/runtime/phisem.hpp"
+#include "chladni/runtime/thread_pool.hpp"
 
 namespace chladni::runtime {
 
@@ -60,6 +61,7 @@ struct ShakerBankOptions {
   uint32_t max_shakes = 4096;  ///< per block
   uint64_t seed = 1;
   ExcitationBackend excitation = ExcitationBackend::Cpu;  ///< Gpu needs a GpuFilterbank
+  int threads = 1;  ///< CPU excitation threads (0: all hardware threads)
 };
 
 class ShakerBank {
@@ -106,6 +108,7 @@ class ShakerBank {
     bool varies = false;
   };
   class GpuStage;
+  static void generate_task(void* self, int task);
   PhisemState& state_ref(int voice);
   void retune(Voice& v, uint32_t index, const PhisemState& st, uint32_t frames);
 
@@ -118,6 +121,9 @@ class ShakerBank {
   std::vector<Shake> shakes_;
   std::size_t shake_count_ = 0;
   std::vector<float> input_;  // CPU backend: voices x max_frames
+  std::unique_ptr<ThreadPool> pool_;
+  uint32_t frames_ = 0;
+  int tasks_ = 1;
   std::unique_ptr<GpuStage> gpu_;
   std::string backend_name_;
 };
