@@ -19,6 +19,7 @@
 #include "chladni/runtime/paper_sheet.hpp"
 #include "chladni/runtime/paper_spatial.hpp"
 #include "chladni/runtime/paper_synth.hpp"
+#include "chladni/runtime/phisem.hpp"
 #include "chladni/runtime/spectral_noise.hpp"
 #include "paper_fixtures.hpp"
 #include "test_support.hpp"
@@ -71,17 +72,26 @@ TEST(PaperSheet, CrumpleBurstsAreDeterministicAndDecay) {
   ASSERT_EQ(b1.size(), b2.size());
   for (std::size_t i = 0; i < b1.size(); ++i) EXPECT_EQ(b1[i].time, b2[i].time);
   EXPECT_NE(b1.size() == b3.size() && b1.back().time == b3.back().time, true);
-  // Rate 600/s decaying with 40 ms: 600 * 0.04 = 24 clicks expected; over many bursts the
-  // mean count and the share in the first 40 ms (1 - 1/e = 63%) match.
+  // One shake of the PhISEM "paper" instrument: clicks with probability N/1024 per reference
+  // sample while the energy d^n stays above 0.001, each as strong as the energy then.
+  const PhisemParams p = phisem_params(phisem_preset("paper"), kPhisemReferenceRate);
+  const double active = std::floor(std::log(kPhisemMinEnergy) / std::log(p.system_decay)) + 1;
+  const double tau = -1.0 / (std::log(p.system_decay) * kPhisemReferenceRate);  // s
   Rng r(9);
-  double clicks = 0, early = 0;
-  for (int k = 0; k < 400; ++k)
-    for (const auto& c : crumple_burst(r)) {
-      clicks += 1;
-      early += c.time < 0.04;
+  double clicks = 0, first = 0, second = 0, n_first = 0, n_second = 0;
+  for (int k = 0; k < 400; ++k) {
+    const auto burst = crumple_burst(r);
+    clicks += burst.size();
+    for (std::size_t i = 1; i < burst.size(); ++i) {  // the snap aside
+      const double t = burst[i].time, s = std::abs(burst[i].strength);
+      if (t < tau) first += s, n_first += 1;
+      if (t >= tau && t < 2 * tau) second += s, n_second += 1;
     }
-  EXPECT_NEAR(clicks / 400, 24, 1.5);
-  EXPECT_NEAR(early / clicks, 0.63, 0.04);
+  }
+  EXPECT_NEAR(clicks / 400, active * p.collision_probability,
+              0.05 * active * p.collision_probability);
+  // Strength falls by e over one time constant.
+  EXPECT_NEAR((second / n_second) / (first / n_first), std::exp(-1.0), 0.05);
 }
 
 TEST(SpectralNoise, ReproducesTheSpectrumItIsGiven) {

@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "chladni/core/error.hpp"
+#include "chladni/runtime/phisem.hpp"
 
 namespace chladni::runtime {
 
@@ -82,16 +83,17 @@ double sheet_mode_shape(const SheetMode& mode, double u, double v) {
   return std::sin(mode.m * pi * u) * std::sin(mode.n * pi * v);
 }
 
-std::vector<CrumpleImpulse> crumple_burst(Rng& rng, double length, double rate) {
+std::vector<CrumpleImpulse> crumple_burst(Rng& rng) {
+  // One shake of the PhISEM "paper" instrument (phisem.hpp): collisions at its rate while the
+  // system energy decays, each as strong as the energy then, in either direction.
+  static const PhisemParams paper = phisem_params(phisem_preset("paper"), kPhisemReferenceRate);
   std::vector<CrumpleImpulse> out;
-  // Thinning of a rate-`rate` Poisson process by exp(-t / length).
-  for (double t = rng.exponential(rate); t < 6 * length; t += rng.exponential(rate)) {
-    const double keep = rng.uniform();
-    const double strength = rng.normal();
+  for (const PhisemCollision& c : phisem_collisions(paper, static_cast<uint32_t>(rng.next()), 1)) {
+    const double sign = rng.uniform() < 0.5 ? -1.0 : 1.0;
     const double u = rng.uniform(), v = rng.uniform();
-    if (keep < std::exp(-t / length)) out.push_back({t, strength, u, v});
+    out.push_back({c.sample / kPhisemReferenceRate, kClickScale * sign * c.energy, u, v});
   }
-  if (out.empty()) out.push_back({0, 1, 0.5, 0.5});  // a crumple always clicks at least once
+  if (out.empty()) out.push_back({0, kClickScale, 0.5, 0.5});  // a crumple always clicks
   // The snap itself: the strongest click comes first.
   out.front().time = 0;
   out.front().strength = std::copysign(2.0 + std::abs(out.front().strength), out.front().strength);

@@ -47,6 +47,18 @@ uint32_t phisem_key(uint64_t seed, uint32_t index) {
   return pcg_hash(s ^ pcg_hash(index + 0x9e3779b9u));
 }
 
+std::vector<PhisemCollision> phisem_collisions(const PhisemParams& p, uint32_t key, float amount) {
+  std::vector<PhisemCollision> out;
+  float energy = std::min(1.0f, amount);
+  for (uint32_t n = 0; energy >= kPhisemMinEnergy; ++n) {
+    const uint32_t h = pcg_hash(n) ^ key;  // counter n: a voice at rest starts at 0
+    energy = energy * p.system_decay;
+    if (unit_float(pcg_hash(h)) < p.collision_probability) out.push_back({n, energy});
+    if (p.system_decay >= 1.0f && n > (1u << 24)) break;  // a system that never loses energy
+  }
+  return out;
+}
+
 void phisem_generate(const PhisemParams& p, PhisemState& st, std::span<const Shake> shakes,
                      uint32_t frames, float* out) {
   if (shakes.empty() && st.energy == 0.0f && st.level == 0.0f && st.x1 == 0.0f && st.x2 == 0.0f) {

@@ -55,9 +55,13 @@ struct CrumpleImpulse {
   double u = 0.5, v = 0.5;
 };
 
-/// A crumple burst (Houle and Sethna 1996: crumpling emits a train of clicks whose rate
-/// decays): Poisson clicks at an exponentially decaying rate (initial `rate` per s, time
-/// constant `length` s), normal strengths, uniform points. Deterministic in the generator.
-std::vector<CrumpleImpulse> crumple_burst(Rng& rng, double length = 0.04, double rate = 600);
+/// Strength of a click at full system energy (the snap adds 2 to the first).
+constexpr double kClickScale = 3.0;
+
+/// A crumple burst (Houle and Sethna 1996: crumpling emits a train of discrete clicks that dies
+/// away): one shake of the PhISEM "paper" instrument, clicks at its collision rate with
+/// strengths kClickScale times the decaying system energy, random signs, uniform points; the
+/// first click is the snap. Deterministic in the generator.
+std::vector<CrumpleImpulse> crumple_burst(Rng& rng);
 
 }  // namespace chladni::runtime

@@ -91,6 +91,18 @@ uint32_t phisem_key(uint64_t seed, uint32_t index);
 void phisem_generate(const PhisemParams& params, PhisemState& state, std::span<const Shake> shakes,
                      uint32_t frames, float* out);
 
+/// A collision of one shake: its sample and the system energy it adds to the sound level.
+struct PhisemCollision {
+  uint32_t sample = 0;
+  float energy = 0;
+};
+
+/// The collisions that one shake of `amount` from rest makes, until the energy falls below
+/// kPhisemMinEnergy: the same decisions phisem_generate() takes for this key. Paper crumple
+/// bursts of the sound database are one shake of the "paper" instrument.
+std::vector<PhisemCollision> phisem_collisions(const PhisemParams& params, uint32_t key,
+                                               float amount);
+
 /// The PCG hash (Jarzynski & Olano, "Hash Functions for GPU Rendering", JCGT 2020), as in GLSL.
 inline uint32_t pcg_hash(uint32_t v) {
   const uint32_t state = v * 747796405u + 2891336453u;
