@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The main job: install dependencies, build Chladni, precompute soundbanks for two bundled meshes
-# and render a scene that strikes them, and render two paper animations, to out/.
+# and render a scene that strikes them, two paper animations and two particle sounds, to out/.
 # Usage: bash scripts/demo.sh            (from the repository root, as root on Debian 12)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -28,5 +28,11 @@ $chladni render examples/struck_bar.json -o out/struck_bar.wav --normalize -1
 $chladni paper meshes/paper/slide.json -o out/paper_slide.wav --spectrogram out/paper_slide.png
 $chladni paper meshes/paper/crumple.json -o out/paper_crumple.wav --paper-mode both --backend gpu \
   --spectrogram out/paper_crumple.png
+# Particle sounds (PhISEM): a tambourine on the GPU (excitation and filterbank), gravel and coins
+# poured into the precomputed bowl beside a maraca (a scene with shake events).
+$chladni shake tambourine -o out/tambourine.wav --duration 3 --shakes-per-second 5 --backend gpu \
+  --normalize -1
+$chladni render examples/gravel_in_bowl.json -o out/gravel_in_bowl.wav --normalize -1
 echo "demo: wrote out/bowl_and_bar.wav, out/bowl_and_bar_gpu.wav, out/struck_bar.wav," \
-  "out/paper_slide.wav and out/paper_crumple.wav (spectrograms beside them)"
+  "out/paper_slide.wav, out/paper_crumple.wav (spectrograms beside them)," \
+  "out/tambourine.wav and out/gravel_in_bowl.wav"
