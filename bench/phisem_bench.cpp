@@ -6,7 +6,8 @@
 // The 1,000-mode object is synthetic (log-spaced modes 60 Hz-16 kHz, random mode shapes at 256
 // surface points): the runtime's cost depends on the counts, not on where the modes came from.
 // Reports wall time per 256-frame block (median, 99th percentile) against the block's 5.33 ms.
-// Usage: chladni_phisem_bench [--seconds S] [--backend cpu,gpu] [--threads N] [--json OUT]
+// Usage: chladni_phisem_bench [--seconds S] [--backend cpu,gpu] [--threads N]
+//                            [--isa auto|scalar|avx2|avx512] [--json OUT]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -56,7 +57,7 @@ ModalModel synthetic_object(std::size_t modes, std::size_t points) {
 struct Result {
   std::string load, backend, device;
   uint32_t voices = 0, slots = 0;
-  double p50 = 0, p99 = 0, realtime = 0;
+  double p50 = 0, p99 = 0, realtime = 0, device_ms = 0;
 };
 
 Result run(const std::string& load, const std::string& backend, Filterbank& fb,
@@ -71,7 +72,7 @@ Result run(const std::string& load, const std::string& backend, Filterbank& fb,
   for (const auto& v : voices) bank.add_voice(v);
   const auto shakes = regular_shakes(bank.voice_count(), 8.0, seconds + 1.0, 0.5f);
   std::vector<float> out(std::size_t(kBlock) * fb.channels());
-  std::vector<double> ms;
+  std::vector<double> ms, dev;
   std::size_t next = 0;
   const uint64_t blocks = static_cast<uint64_t>(seconds * kFs / kBlock);
   double total = 0;
@@ -86,10 +87,12 @@ Result run(const std::string& load, const std::string& backend, Filterbank& fb,
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     if (b >= 20) {
       ms.push_back(dt);
+      dev.push_back(fb.last_timing().gpu_ms);
       total += dt;
     }
   }
   std::sort(ms.begin(), ms.end());
+  std::sort(dev.begin(), dev.end());
   Result r;
   r.load = load;
   r.backend = backend;
@@ -99,6 +102,7 @@ Result run(const std::string& load, const std::string& backend, Filterbank& fb,
   r.p50 = ms[ms.size() / 2];
   r.p99 = ms[std::min(ms.size() - 1, ms.size() * 99 / 100)];
   r.realtime = (double(ms.size()) * kBlock / kFs) / (total * 1e-3);
+  r.device_ms = dev[dev.size() / 2];
   return r;
 }
 
@@ -107,7 +111,7 @@ Result run(const std::string& load, const std::string& backend, Filterbank& fb,
 int main(int argc, char** argv) {
   double seconds = 3;
   int threads = 0;
-  std::string json_path, backends = "cpu,gpu";
+  std::string json_path, backends = "cpu,gpu", isa = "auto";
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--seconds"))
       seconds = std::atof(argv[i + 1]);
@@ -115,6 +119,8 @@ int main(int argc, char** argv) {
       threads = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--backend"))
       backends = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--isa"))
+      isa = argv[i + 1];
     else if (!std::strcmp(argv[i], "--json"))
       json_path = argv[i + 1];
     else {
@@ -159,15 +165,28 @@ int main(int argc, char** argv) {
           break;
         }
       } else {
-        fb = std::make_unique<CpuFilterbank>(CpuFilterbankOptions{
-            .capacity = slots, .channels = 1, .threads = threads, .max_frames = kBlock});
+        const CpuIsa cpu_isa = isa == "scalar"   ? CpuIsa::Scalar
+                               : isa == "avx2"   ? CpuIsa::Avx2
+                               : isa == "avx512" ? CpuIsa::Avx512
+                                                 : CpuIsa::Auto;
+        if (!CpuFilterbank::supports(cpu_isa)) {
+          std::fprintf(stderr, "this processor cannot run --isa %s\n", isa.c_str());
+          return 2;
+        }
+        fb = std::make_unique<CpuFilterbank>(CpuFilterbankOptions{.capacity = slots,
+                                                                  .channels = 1,
+                                                                  .threads = threads,
+                                                                  .isa = cpu_isa,
+                                                                  .max_frames = kBlock});
       }
       results.push_back(run(load == 0 ? "1000 voices x 4 resonances" : "100 voices x 1000 modes",
                             backend, *fb, voices, seconds, threads));
       const Result& r = results.back();
-      std::printf("%-28s %-4s %6u slots  block p50 %7.3f ms  p99 %7.3f ms  %6.1fx real time  %s\n",
-                  r.load.c_str(), r.backend.c_str(), r.slots, r.p50, r.p99, r.realtime,
-                  r.device.c_str());
+      std::printf(
+          "%-28s %-4s %6u slots  block p50 %7.3f ms  p99 %7.3f ms  device %7.3f ms  %6.1fx real "
+          "time  %s\n",
+          r.load.c_str(), r.backend.c_str(), r.slots, r.p50, r.p99, r.device_ms, r.realtime,
+          r.device.c_str());
     }
   }
   if (!json_path.empty()) {
@@ -181,6 +200,7 @@ int main(int argc, char** argv) {
                    {"block_frames", kBlock},
                    {"block_ms_p50", r.p50},
                    {"block_ms_p99", r.p99},
+                   {"device_ms_p50", r.device_ms},
                    {"realtime_factor", r.realtime}});
     std::ofstream(json_path) << j.dump(2) << "\n";
   }
