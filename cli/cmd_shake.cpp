@@ -16,12 +16,14 @@
 #include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/transfer_gains.hpp"
 #include "commands.hpp"
+#include "spectrogram.hpp"
 
 namespace chladni::cli {
 namespace {
 
 struct ShakeArgs {
-  std::string instrument, output, bank, backend = "cpu", format = "float", listener = "0,0,1";
+  std::string instrument, output, bank, backend = "cpu", format = "float", listener = "0,0,1",
+                                        spectrogram;
   double duration = 2.0, rate = 4.0, particles = 0, energy = 0.5, impulse = 1e-3;
   double normalize_db = NAN;
   int sample_rate = 48000, threads = 0;
@@ -157,6 +159,7 @@ void run_shake(const ShakeArgs& a) {
     for (float& x : audio.samples) x = static_cast<float>(x * g);
   }
   write_wav(a.output, audio, format);
+  if (!a.spectrogram.empty()) write_spectrogram_png(a.spectrogram, audio);
   if (!a.quiet) {
     uint64_t collisions = 0;
     for (uint32_t v = 0; v < bank.voice_count(); ++v) collisions += bank.state(int(v)).collisions;
@@ -168,6 +171,7 @@ void run_shake(const ShakeArgs& a) {
                 fb->name().c_str(), bank.backend_name().c_str(), a.duration, wall,
                 wall > 0 ? a.duration / wall : 0.0, peak);
     std::printf("wrote %s\n", a.output.c_str());
+    if (!a.spectrogram.empty()) std::printf("wrote %s\n", a.spectrogram.c_str());
   }
   if (std::isnan(a.normalize_db) && peak > 1.0 && format != SampleFormat::Float32)
     std::fprintf(stderr, "warning: peak %.3g exceeds full scale and was clipped; use --normalize\n",
@@ -208,6 +212,7 @@ void add_shake(CLI::App& app) {
   cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)");
   cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")
       ->capture_default_str();
+  cmd->add_option("--spectrogram", a->spectrogram, "Also write the sound's spectrogram as PNG");
   cmd->add_flag("-q,--quiet", a->quiet, "Print nothing but errors");
   cmd->callback([a] { run_shake(*a); });
 }
