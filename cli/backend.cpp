@@ -66,4 +66,11 @@ std::shared_ptr<gpu::Context> transfer_device(const std::string& backend) {
   }
 }
 
+SampleFormat parse_sample_format(const std::string& name) {
+  if (name == "float") return SampleFormat::Float32;
+  if (name == "pcm24") return SampleFormat::Pcm24;
+  if (name == "pcm16") return SampleFormat::Pcm16;
+  throw InputError("--format must be float, pcm24 or pcm16");
+}
+
 }  // namespace chladni::cli

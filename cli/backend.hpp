@@ -4,6 +4,7 @@
 #include <memory>
 #include <string>
 
+#include "chladni/core/audio_file.hpp"
 #include "chladni/runtime/filterbank.hpp"
 
 namespace chladni::gpu {
@@ -28,5 +29,8 @@ std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& reque
 /// "cpu" (null) or "auto" (a discrete or integrated GPU when present, else null: on a CPU
 /// driver such as lavapipe the double-precision CPU kernels are as fast, see PERFORMANCE.md).
 std::shared_ptr<gpu::Context> transfer_device(const std::string& backend);
+
+/// The --format option of commands that write WAV: float, pcm24 or pcm16 (InputError otherwise).
+SampleFormat parse_sample_format(const std::string& name);
 
 }  // namespace chladni::cli

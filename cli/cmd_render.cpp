@@ -98,13 +98,7 @@ void run_render(const RenderArgs& a) {
     scene.sample_rate = a.sample_rate;
   }
   if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
-  SampleFormat format = SampleFormat::Float32;
-  if (a.format == "pcm24")
-    format = SampleFormat::Pcm24;
-  else if (a.format == "pcm16")
-    format = SampleFormat::Pcm16;
-  else if (a.format != "float")
-    throw InputError("--format must be float, pcm24 or pcm16");
+  const SampleFormat format = parse_sample_format(a.format);
 
   if (!a.quiet)
     std::printf("scene %s: %zu objects, %zu impacts, %zu moves, %zu shakes\n", a.scene.c_str(),

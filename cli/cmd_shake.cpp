@@ -81,13 +81,7 @@ void run_shake(const ShakeArgs& a) {
     throw InputError("--particles must lie in [0, 1e6] (0: the instrument's own)");
   if (!(std::isfinite(a.duration) && a.duration > 0 && a.duration <= 3600))
     throw InputError("--duration must lie in (0, 3600] s");
-  SampleFormat format = SampleFormat::Float32;
-  if (a.format == "pcm24")
-    format = SampleFormat::Pcm24;
-  else if (a.format == "pcm16")
-    format = SampleFormat::Pcm16;
-  else if (a.format != "float")
-    throw InputError("--format must be float, pcm24 or pcm16");
+  const SampleFormat format = parse_sample_format(a.format);
   const double fs = a.sample_rate;
   const int channels = a.voices > 1 ? 2 : 1;
 

@@ -108,13 +108,20 @@ MoveEvent parse_move(Obj o, const Scene& scene, bool listener) {
   return ev;
 }
 
-ImpactEvent parse_event(Obj o, const Scene& scene) {
-  ImpactEvent ev;
+// The fields every event on an object has: its path, type (already dispatched on), time, object.
+template <class Event>
+Event event_on_object(Obj& o, const Scene& scene) {
+  Event ev;
   ev.json_path = o.path();
   o.string("type");
   ev.time = o.number("time");
   if (ev.time < 0) fail(o.at("time"), "must be >= 0");
   ev.object = find_object(o, scene);
+  return ev;
+}
+
+ImpactEvent parse_event(Obj o, const Scene& scene) {
+  ImpactEvent ev = event_on_object<ImpactEvent>(o, scene);
   ev.impulse = o.number("impulse");
   if (!(ev.impulse > 0)) fail(o.at("impulse"), "must be > 0");
   if (o.has("direction")) ev.direction = o.unit("direction");
@@ -132,12 +139,7 @@ ImpactEvent parse_event(Obj o, const Scene& scene) {
 }
 
 ShakeEvent parse_shake(Obj o, const Scene& scene) {
-  ShakeEvent ev;
-  ev.json_path = o.path();
-  o.string("type");
-  ev.time = o.number("time");
-  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
-  ev.object = find_object(o, scene);
+  ShakeEvent ev = event_on_object<ShakeEvent>(o, scene);
   ev.instrument = o.string("instrument");
   ev.energy = o.number("energy", 0.5);
   if (!(ev.energy > 0 && ev.energy <= 1)) fail(o.at("energy"), "must lie in (0, 1]");

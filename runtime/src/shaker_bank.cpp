@@ -179,10 +179,12 @@ int ShakerBank::add_voice(const ShakerVoice& sv) {
                   p.eq[2], sv.pan[0], sv.pan[1]}) {
     if (!std::isfinite(x)) throw InputError("voice '" + sv.name + "': non-finite parameter");
   }
-  for (const ShakerResonance& r : sv.resonances) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const ShakerResonance& r = sv.resonances[i];
     if (!(std::isfinite(r.omega_d) && std::isfinite(r.decay) && r.decay >= 0 && finite(r.input) &&
           std::isfinite(r.gain) && std::isfinite(r.vary) && std::isfinite(r.sweep) && r.sweep > 0))
-      throw InputError("voice '" + sv.name + "': non-finite or negative resonance value");
+      throw InputError("voice '" + sv.name + "': resonance " + std::to_string(i) +
+                       " has a non-finite or negative value");
   }
   for (const auto& c : sv.contacts) {
     if (c.size() != n) throw InputError("voice '" + sv.name + "': contact gains per resonance");
