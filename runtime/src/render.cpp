@@ -55,7 +55,8 @@ ShakerVoice shake_voice(const ShakeEvent& ev, const ObjectModes& obj, double fs,
 
 }  // namespace
 
-SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& objects) {
+SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& objects,
+                           uint64_t seed) {
   SceneShakers out;
   for (std::size_t e = 0; e < scene.shakes.size(); ++e) {
     const ShakeEvent& ev = scene.shakes[e];
@@ -65,8 +66,8 @@ SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& o
       ++v;
     if (v == static_cast<int>(out.first_event.size())) {
       out.first_event.push_back(e);
-      out.slots += static_cast<uint32_t>(
-          shake_voice(ev, objects.at(ev.object), scene.sample_rate, 1).resonances.size());
+      out.voices.push_back(shake_voice(ev, objects.at(ev.object), scene.sample_rate, seed + v));
+      out.slots += static_cast<uint32_t>(out.voices.back().resonances.size());
     }
     out.voice.push_back(v);
   }
@@ -139,7 +140,7 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
   so.sample_rate = fs;
   so.max_voices = std::max<uint32_t>(so.max_voices, static_cast<uint32_t>(objects.size()));
   // Shake events: their voices take the slots above the synth's budget.
-  const SceneShakers shakers = scene_shakers(scene, objects);
+  const SceneShakers shakers = scene_shakers(scene, objects, options.seed);
   std::unique_ptr<ShakerBank> bank;
   if (!shakers.first_event.empty()) {
     if (fb.capacity() <= shakers.slots)
@@ -155,10 +156,7 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
     bo.excitation =
         dynamic_cast<GpuFilterbank*>(&fb) ? ExcitationBackend::Gpu : ExcitationBackend::Cpu;
     bank = std::make_unique<ShakerBank>(fb, bo);
-    for (std::size_t v = 0; v < shakers.first_event.size(); ++v) {
-      const ShakeEvent& ev = scene.shakes[shakers.first_event[v]];
-      bank->add_voice(shake_voice(ev, objects[ev.object], fs, options.seed + v));
-    }
+    for (const ShakerVoice& v : shakers.voices) bank->add_voice(v);
   }
   Synth synth(fb, so);
 
@@ -239,7 +237,7 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
         if (ev.resonate_object) {
           bank->set_gains(static_cast<int>(v), gains, pan[0], pan[1]);
         } else {
-          const std::vector<float> flat(phisem_preset(ev.instrument).resonances.size(),
+          const std::vector<float> flat(shakers.voices[v].resonances.size(),
                                         static_cast<float>(spread));
           bank->set_gains(static_cast<int>(v), flat, pan[0], pan[1]);
         }
@@ -255,11 +253,10 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
   if (!scene.shakes.empty()) {
     // A shaken voice sounds while its energy lasts and then rings with its slowest resonance.
     double ring = 0;
-    for (std::size_t v = 0; v < shakers.first_event.size(); ++v) {
-      const ShakeEvent& ev = scene.shakes[shakers.first_event[v]];
-      const PhisemParams p = phisem_params(phisem_preset(ev.instrument), fs, ev.particles);
+    for (const ShakerVoice& v : shakers.voices) {
+      const PhisemParams& p = v.excitation;
       double slowest = 1e9;
-      for (const ShakerResonance& r : shake_voice(ev, objects[ev.object], fs, 1).resonances)
+      for (const ShakerResonance& r : v.resonances)
         slowest = std::min(slowest, std::max(r.decay, 1e-3));
       const double energy_s = p.system_decay < 1
                                   ? std::log(kPhisemMinEnergy) / std::log(p.system_decay) / fs

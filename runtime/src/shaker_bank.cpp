@@ -307,7 +307,7 @@ void ShakerBank::generate_task(void* self_ptr, int task) {
   }
 }
 
-void ShakerBank::retune(Voice& v, uint32_t index, const PhisemState& st, uint32_t frames) {
+void ShakerBank::retune(Voice& v, const PhisemState& st, uint32_t frames) {
   const bool collided = st.collisions != v.collisions_before;
   for (std::size_t j = 0; j < v.res.size(); ++j) {
     const ShakerResonance& r = v.res[j];
@@ -320,19 +320,18 @@ void ShakerBank::retune(Voice& v, uint32_t index, const PhisemState& st, uint32_
     } else if (r.sweep != 1) {
       hz *= std::pow(r.sweep, frames / opt_.sample_rate);
     }
+    hz = std::min(hz, 0.49 * opt_.sample_rate);  // a sweep stops below Nyquist
     if (hz == v.hz[j]) continue;
-    hz = std::min(hz, 0.49 * opt_.sample_rate);
     v.hz[j] = hz;
     fb_.set_pole(v.first_slot + static_cast<uint32_t>(j),
                  pole(kTwoPi * hz, r.decay, opt_.sample_rate));
   }
-  (void)index;
 }
 
 void ShakerBank::finish(uint32_t frames) {
   for (uint32_t i = 0; i < voice_count(); ++i) {
     Voice& v = voices_[i];
-    if (v.varies) retune(v, i, state_ref(int(i)), frames);
+    if (v.varies) retune(v, state_ref(int(i)), frames);
   }
 }
 

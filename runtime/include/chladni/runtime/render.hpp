@@ -11,6 +11,7 @@
 #include "chladni/core/modal_model.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/runtime/filterbank.hpp"
+#include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/synth.hpp"
 
 namespace chladni::gpu {
@@ -41,14 +42,16 @@ void impact_amplitudes(const ObjectModes& object, const ImpactEvent& event, doub
                        std::vector<std::complex<float>>& out);
 
 /// The shaker voices a scene's shake events need: one per (object, instrument, resonance choice,
-/// particle count, impulse); `voice[e]` is scene.shakes[e]'s. Validates the instruments
-/// (InputError naming the event's JSON path).
+/// particle count, impulse), voice v seeded with seed + v; `voice[e]` is scene.shakes[e]'s.
+/// Validates the instruments (InputError naming the event's JSON path).
 struct SceneShakers {
   std::vector<std::size_t> first_event;  ///< per voice: the event that defines it
+  std::vector<ShakerVoice> voices;       ///< per voice
   std::vector<int> voice;                ///< per shake event
   uint32_t slots = 0;                    ///< filterbank slots of all the voices
 };
-SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& objects);
+SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& objects,
+                           uint64_t seed = 1);
 
 struct RenderOptions {
   uint32_t block = 256;    ///< frames per filterbank call

@@ -110,7 +110,7 @@ class ShakerBank {
   class GpuStage;
   static void generate_task(void* self, int task);
   PhisemState& state_ref(int voice);
-  void retune(Voice& v, uint32_t index, const PhisemState& st, uint32_t frames);
+  void retune(Voice& v, const PhisemState& st, uint32_t frames);
 
   Filterbank& fb_;
   ShakerBankOptions opt_;
