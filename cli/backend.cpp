@@ -66,6 +66,15 @@ std::shared_ptr<gpu::Context> transfer_device(const std::string& backend) {
   }
 }
 
+precompute::AcousticOptions::Method parse_transfer_method(const std::string& name,
+                                                          const std::string& option) {
+  using M = precompute::AcousticOptions::Method;
+  if (name == "auto") return M::Auto;
+  if (name == "bem") return M::Bem;
+  if (name == "sources") return M::Sources;
+  throw InputError(option + ": unknown method '" + name + "' (auto, bem, sources)");
+}
+
 SampleFormat parse_sample_format(const std::string& name) {
   if (name == "float") return SampleFormat::Float32;
   if (name == "pcm24") return SampleFormat::Pcm24;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "chladni/core/audio_file.hpp"
+#include "chladni/precompute/acoustic_transfer.hpp"
 #include "chladni/runtime/filterbank.hpp"
 
 namespace chladni::gpu {
@@ -29,6 +30,10 @@ std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& reque
 /// "cpu" (null) or "auto" (a discrete or integrated GPU when present, else null: on a CPU
 /// driver such as lavapipe the double-precision CPU kernels are as fast, see PERFORMANCE.md).
 std::shared_ptr<gpu::Context> transfer_device(const std::string& backend);
+
+/// auto, bem or sources (InputError naming `option` otherwise).
+precompute::AcousticOptions::Method parse_transfer_method(const std::string& name,
+                                                          const std::string& option);
 
 /// The --format option of commands that write WAV: float, pcm24 or pcm16 (InputError otherwise).
 SampleFormat parse_sample_format(const std::string& name);

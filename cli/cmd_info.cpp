@@ -68,7 +68,9 @@ void run_info(const InfoArgs& a) {
            {"residual", r.res}});
       if (b.transfer) {
         const ModeTransfer& m = b.transfer->modes[i];
-        modes.back()["transfer"] = {{"order", m.order},
+        modes.back()["transfer"] = {{"method", to_string(m.method)},
+                                    {"iterations", m.iterations},
+                                    {"order", m.order},
                                     {"sources", m.sources},
                                     {"fit_residual", m.fit_residual},
                                     {"held_out_error", m.held_out_error},
@@ -97,6 +99,13 @@ void run_info(const InfoArgs& a) {
         "kg/m^3; %zu coefficients; %zu poor fits (held-out error > %.0f%%)\n",
         t.centre[0], t.centre[1], t.centre[2], t.radius, t.sound_speed, t.air_density,
         t.coefficients.size(), poor, 100.0 * Transfer::kPoorFit);
+    std::size_t bem = 0;
+    for (const ModeTransfer& m : t.modes) bem += m.method == TransferMethod::Bem;
+    if (bem > 0)
+      std::printf(
+          "          %zu modes by BEM (Burton-Miller): src/el. = boundary elements, residual = "
+          "linear solve, held-out = interior null-field error\n",
+          bem);
   } else {
     std::printf("transfer  none (listener gains use a compact-source estimate)\n");
   }
@@ -106,15 +115,16 @@ void run_info(const InfoArgs& a) {
   std::printf("%zu modes\n%6s %12s %12s %12s %10s %10s", b.mode_count(), "mode", "freq (Hz)",
               "decay (1/s)", "damp. ratio", "T60 (s)", "residual");
   if (b.transfer)
-    std::printf(" %5s %7s %9s %9s %9s", "order", "sources", "fit res.", "held-out", "expansion");
+    std::printf(" %7s %5s %5s %7s %9s %9s %9s", "method", "iters", "order", "src/el.", "residual",
+                "held-out", "expansion");
   std::printf("\n");
   for (std::size_t i = 0; i < b.mode_count(); ++i) {
     const auto r = row(i);
     std::printf("%6zu %12.2f %12.4g %12.3g %10.3g %10.2g", i, r.f, r.d, r.zeta, r.t60, r.res);
     if (b.transfer) {
       const ModeTransfer& m = b.transfer->modes[i];
-      std::printf(" %5u %7u %9.2e %9.2e %9.2e%s", m.order, m.sources, m.fit_residual,
-                  m.held_out_error, m.expansion_error,
+      std::printf(" %7s %5u %5u %7u %9.2e %9.2e %9.2e%s", to_string(m.method), m.iterations,
+                  m.order, m.sources, m.fit_residual, m.held_out_error, m.expansion_error,
                   !b.transfer->usable(i) ? "  POOR FIT (unused: compact-source gain instead)"
                   : b.transfer->poor(i)  ? "  POOR FIT"
                                          : "");

@@ -24,7 +24,7 @@ struct PrecomputeArgs {
   double max_tet_volume = 0;
   int order = 2, threads = 0;
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
-  std::string eigensolver = "block", transfer_backend = "auto";
+  std::string eigensolver = "block", transfer_backend = "auto", transfer_method = "auto";
   bool repair = false, quiet = false, no_transfer = false;
   int transfer_order = 0;
   std::size_t transfer_max_sources = 1024;
@@ -122,6 +122,8 @@ void run_precompute(const PrecomputeArgs& a) {
   o.acoustic.sound_speed = a.sound_speed;
   o.acoustic.air_density = a.air_density;
   o.acoustic.threads = a.threads;
+  o.acoustic.bem.threads = a.threads;
+  o.acoustic.method = parse_transfer_method(a.transfer_method, "--transfer-method");
   o.acoustic.validate();
   if (o.transfer) o.gpu = transfer_device(a.transfer_backend);
   if (a.eigensolver == "spectra")
@@ -232,6 +234,11 @@ void add_precompute(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--transfer-max-sources", a->transfer_max_sources,
                   "Most equivalent sources per mode")
+      ->capture_default_str();
+  cmd->add_option(
+         "--transfer-method", a->transfer_method,
+         "Surface pressure per mode: bem (Burton-Miller boundary elements), sources "
+         "(equivalent-source fit) or auto (BEM up to 2500 surface triangles, else sources)")
       ->capture_default_str();
   cmd->add_option("--transfer-backend", a->transfer_backend,
                   "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")

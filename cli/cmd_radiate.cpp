@@ -27,7 +27,7 @@ using cd = std::complex<double>;
 
 struct RadiateArgs {
   std::string mesh, velocity, pattern, points, backend = "cpu", json_path, unit = "m",
-                                               via = "sources";
+                                               via = "sources", method = "auto";
   double freq = 0, scale = 1, sound_speed = 343.0, air_density = 1.204;
   int order = 0;
 };
@@ -118,8 +118,8 @@ void run_radiate(const RadiateArgs& a) {
   if (!(a.freq > 0) || !std::isfinite(a.freq)) throw InputError("--freq must be finite and > 0");
   if (a.velocity.empty() == a.pattern.empty())
     throw InputError("give exactly one of --velocity FILE and --pattern NAME");
-  if (a.via != "sources" && a.via != "multipole")
-    throw InputError("--via must be sources or multipole");
+  if (a.via != "sources" && a.via != "multipole" && a.via != "surface")
+    throw InputError("--via must be surface, sources or multipole");
   const precompute::SurfaceMesh mesh =
       precompute::read_mesh(a.mesh, precompute::unit_scale(a.unit) * a.scale);
   precompute::require_valid(precompute::check_mesh(mesh), a.mesh, false);
@@ -148,31 +148,48 @@ void run_radiate(const RadiateArgs& a) {
   if (a.backend != "gpu" && a.backend != "cpu") throw InputError("--backend must be cpu or gpu");
   std::unique_ptr<precompute::TransferKernels> kernels =
       ctx ? precompute::make_gpu_transfer_kernels(ctx) : precompute::make_cpu_transfer_kernels();
+  o.method = parse_transfer_method(a.method, "--method");
+  const bool bem = precompute::resolve_method(surf, o) == precompute::AcousticOptions::Method::Bem;
   const double k = 2 * std::numbers::pi * a.freq / o.sound_speed;
-  const precompute::SourceFit fit =
-      precompute::fit_sources(surf, k, surf.from_vertex_values(un), o, *kernels);
-  std::vector<cd> a_lm;
-  const ModeTransfer mt = precompute::expand_sources(surf, fit, o, *kernels, a_lm);
-  std::vector<cd> p;
-  if (a.via == "sources") {
-    p = precompute::source_pressure(surf, fit, pts, *kernels);
+  const precompute::NormalVelocity un_of = surf.from_vertex_values(un);
+  std::vector<cd> a_lm, surface_p, surface_q;
+  precompute::SourceFit fit;
+  std::unique_ptr<precompute::BemMesh> bem_mesh;
+  ModeTransfer mt;
+  if (bem) {
+    bem_mesh = std::make_unique<precompute::BemMesh>(mesh);
+    precompute::BemSolver solver(*bem_mesh, o.bem);
+    mt = precompute::bem_transfer(surf, *bem_mesh, solver, k, un_of, o, a_lm, nullptr, &surface_p,
+                                  &surface_q);
   } else {
+    fit = precompute::fit_sources(surf, k, un_of, o, *kernels);
+    mt = precompute::expand_sources(surf, fit, o, *kernels, a_lm);
+  }
+  std::vector<cd> p;
+  if (a.via == "multipole") {
     Transfer t;
     t.centre = surf.centre();
     t.radius = surf.radius();
     t.add_mode(mt, a_lm);
     for (const Vec3& x : pts) p.push_back(t.pressure(0, x));
+  } else if (bem) {
+    p = precompute::bem_field(*bem_mesh, k, surface_p, surface_q, pts, o.bem);
+  } else {
+    p = precompute::source_pressure(surf, fit, pts, *kernels);
   }
 
   nlohmann::json j;
   j["mesh"] = a.mesh;
   j["frequency_hz"] = a.freq;
   j["wavenumber"] = k;
-  j["kernels"] = kernels->name();
-  j["via"] = a.via;
-  j["fit"] = {{"sources", fit.sources.size()},
-              {"fit_residual", fit.residual},
-              {"held_out_error", fit.held_out},
+  j["method"] = to_string(mt.method);
+  j["kernels"] = bem ? std::string("cpu (double)") : kernels->name();
+  j["via"] = a.via == "multipole" ? "multipole" : bem ? "surface" : "sources";
+  j["fit"] = {{"method", to_string(mt.method)},
+              {bem ? "elements" : "sources", mt.sources},
+              {bem ? "residual" : "fit_residual", mt.fit_residual},
+              {bem ? "null_field_error" : "held_out_error", mt.held_out_error},
+              {"iterations", mt.iterations},
               {"order", mt.order},
               {"expansion_error", mt.expansion_error},
               {"centre", surf.centre()},
@@ -189,11 +206,18 @@ void run_radiate(const RadiateArgs& a) {
     if (!f) throw InputError("cannot write " + a.json_path);
     f << j.dump(2) << '\n';
   }
-  std::printf(
-      "%s at %.6g Hz (ka %.3g) with %s: %zu sources, fit residual %.2e, held-out %.2e, "
-      "order %u, expansion error %.2e\n",
-      a.mesh.c_str(), a.freq, k * surf.radius(), kernels->name().c_str(), fit.sources.size(),
-      fit.residual, fit.held_out, mt.order, mt.expansion_error);
+  if (bem)
+    std::printf(
+        "%s at %.6g Hz (ka %.3g) by BEM: %u elements, residual %.2e, %u GMRES iterations, "
+        "null-field error %.2e, order %u, expansion error %.2e\n",
+        a.mesh.c_str(), a.freq, k * surf.radius(), mt.sources, mt.fit_residual, mt.iterations,
+        mt.held_out_error, mt.order, mt.expansion_error);
+  else
+    std::printf(
+        "%s at %.6g Hz (ka %.3g) with %s: %zu sources, fit residual %.2e, held-out %.2e, "
+        "order %u, expansion error %.2e\n",
+        a.mesh.c_str(), a.freq, k * surf.radius(), kernels->name().c_str(), fit.sources.size(),
+        fit.residual, fit.held_out, mt.order, mt.expansion_error);
   std::printf("%12s %12s %12s %14s %14s %12s\n", "x", "y", "z", "re p (Pa)", "im p (Pa)",
               "|p| (Pa)");
   for (std::size_t i = 0; i < pts.size(); ++i)
@@ -217,8 +241,13 @@ void add_radiate(CLI::App& app) {
   cmd->add_option("--points", a->points, "Field points, one 'x y z' per line (m)")->required();
   cmd->add_option("--backend", a->backend, "Kernels: cpu (double) or gpu (Vulkan, float)")
       ->capture_default_str();
+  cmd->add_option("--method", a->method,
+                  "Surface pressure: bem (Burton-Miller boundary elements), sources "
+                  "(equivalent-source fit) or auto (BEM up to 2500 triangles, else sources)")
+      ->capture_default_str();
   cmd->add_option("--via", a->via,
-                  "Evaluate by the fitted sources, or by the stored multipole series (r >= R)")
+                  "Evaluate directly from the surface solution (surface; 'sources' is its old "
+                  "name), or by the stored multipole series (multipole, r >= R)")
       ->capture_default_str();
   cmd->add_option("--order", a->order, "Multipole order (0: automatic)")->capture_default_str();
   cmd->add_option("--unit", a->unit, "Unit of the mesh coordinates: m, cm, mm")

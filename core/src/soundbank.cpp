@@ -139,7 +139,8 @@ std::vector<uint8_t> serialize_soundbank(const Soundbank& b) {
     w.le(t.radius), w.le(t.sound_speed), w.le(t.air_density);
     for (const ModeTransfer& m : t.modes) {
       w.le(m.wavenumber), w.le(m.order), w.le(m.sources);
-      w.le(m.fit_residual), w.le(m.held_out_error), w.le(m.expansion_error), w.le<uint32_t>(0);
+      w.le(m.fit_residual), w.le(m.held_out_error), w.le(m.expansion_error);
+      w.le<uint16_t>(static_cast<uint16_t>(m.method)), w.le<uint16_t>(m.iterations);
     }
     w.le<uint64_t>(t.coefficients.size());
     for (const auto& z : t.coefficients) w.le(z.real()), w.le(z.imag());
@@ -303,7 +304,12 @@ Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& 
       m.order = r.le<uint32_t>(), m.sources = r.le<uint32_t>();
       m.fit_residual = r.le<float>(), m.held_out_error = r.le<float>();
       m.expansion_error = r.le<float>();
-      r.le<uint32_t>();
+      const auto method = r.le<uint16_t>();  // 0 before format 1.2
+      m.iterations = r.le<uint16_t>();
+      if (method > uint16_t(TransferMethod::Bem))
+        r.fail("mode " + std::to_string(i) + " has unknown transfer method " +
+               std::to_string(method));
+      m.method = TransferMethod(method);
       if (m.order > 200)
         r.fail("mode " + std::to_string(i) + " has order " + std::to_string(m.order));
       m.offset = total;

@@ -11,6 +11,10 @@ namespace {
 constexpr uint32_t kMaxOrder = 200;
 }
 
+const char* to_string(TransferMethod method) {
+  return method == TransferMethod::Bem ? "bem" : "sources";
+}
+
 void Transfer::add_mode(ModeTransfer mode, const std::vector<std::complex<double>>& a) {
   if (a.size() != sh_count(static_cast<int>(mode.order)))
     throw InternalError("transfer: coefficient count does not match the order");

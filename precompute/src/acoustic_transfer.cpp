@@ -155,6 +155,7 @@ void AcousticOptions::validate() const {
   if (min_sources < 1 || max_sources < min_sources)
     throw InputError("transfer: need 1 <= min sources <= max sources");
   if (max_collocation < 16) throw InputError("transfer: max collocation must be >= 16");
+  bem.validate();
 }
 
 RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOptions& o)
@@ -244,6 +245,16 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
     held_.push_back({t, {2.0 / 3, 1.0 / 6, 1.0 / 6}});
     held_weight_.push_back(nh == nt ? face_area_[t] : area_ / double(nh));
   }
+}
+
+std::vector<Vec3> RadiatingSurface::interior_points(std::size_t count, double min_depth) const {
+  std::vector<Vec3> out;
+  for (std::size_t i = 0; i < anchors_.size() && out.size() < count; ++i) {
+    if (!(anchor_depth_[i] >= min_depth)) continue;
+    const uint32_t v = anchors_[i];
+    out.push_back(sub(mesh_.vertices[v], scale(vertex_normal_[v], anchor_depth_[i])));
+  }
+  return out;
 }
 
 NormalVelocity RadiatingSurface::from_vertex_values(std::span<const cd> un) const {
@@ -410,6 +421,12 @@ std::vector<cd> source_pressure(const RadiatingSurface& surface, const SourceFit
   return p;
 }
 
+int expansion_order(double k, double radius, const AcousticOptions& o) {
+  if (o.order > 0) return o.order;
+  const double kr = k * radius;
+  return std::min(static_cast<int>(std::ceil(kr + 2.0 * std::cbrt(kr))) + 8, o.max_order);
+}
+
 ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fit,
                             const AcousticOptions& o, TransferKernels& kernels, std::vector<cd>& a,
                             TransferTimes* times) {
@@ -417,9 +434,7 @@ ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fi
   const double k = fit.k, R = surface.radius();
   double rs_max = 0;
   for (const Vec3& y : fit.sources) rs_max = std::max(rs_max, std::sqrt(dot(y, y)));
-  const double kr = k * rs_max;
-  int L = o.order > 0 ? o.order : static_cast<int>(std::ceil(kr + 2.0 * std::cbrt(kr))) + 8;
-  L = std::min(L, o.order > 0 ? o.order : o.max_order);
+  const int L = expansion_order(k, rs_max, o);
   const std::size_t nlm = sh_count(L);
 
   // c_lm = i k sum_s q_s j_l(k r_s) Y_lm(y_s); a_lm = c_lm h_l(k R).
@@ -437,6 +452,21 @@ ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fi
       for (int m = -l; m <= l; ++m) a[sh_index(l, m)] += f * y[sh_index(l, m)];
     }
   }
+  ModeTransfer mt =
+      finish_expansion(surface, k, L, a, o, [&](const std::vector<Vec3>& pts, cd* out) {
+        kernels.field(pts, fit.sources, fit.strength, k, out);
+      });
+  mt.sources = static_cast<uint32_t>(fit.sources.size());
+  mt.fit_residual = static_cast<float>(fit.residual);
+  mt.held_out_error = static_cast<float>(fit.held_out);
+  if (times) times->expand += seconds_since(t0);
+  return mt;
+}
+
+ModeTransfer finish_expansion(const RadiatingSurface& surface, double k, int L, std::vector<cd>& a,
+                              const AcousticOptions& o,
+                              const std::function<void(const std::vector<Vec3>&, cd*)>& direct) {
+  const double R = surface.radius();
   // Trim the orders that carry (almost) nothing at 2R.
   std::vector<cd> ratio(static_cast<std::size_t>(L) + 1);
   sph_hankel1_ratio(L, 2.0 * k * R, k * R, ratio.data());
@@ -458,15 +488,12 @@ ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fi
   ModeTransfer mt;
   mt.wavenumber = k;
   mt.order = static_cast<uint32_t>(keep);
-  mt.sources = static_cast<uint32_t>(fit.sources.size());
-  mt.fit_residual = static_cast<float>(fit.residual);
-  mt.held_out_error = static_cast<float>(fit.held_out);
 
-  // Check against the sources on the sphere of radius 2R.
+  // Check against the direct field on the sphere of radius 2R.
   const std::size_t nchk = std::clamp<std::size_t>(2 * sh_count(keep), 64, 512);
   const std::vector<Vec3> pts = fibonacci_sphere(nchk, 2.0 * R);
-  std::vector<cd> direct(nchk);
-  kernels.field(pts, fit.sources, fit.strength, k, direct.data());
+  std::vector<cd> ref(nchk);
+  direct(pts, ref.data());
   std::vector<cd> rr(static_cast<std::size_t>(keep) + 1);
   sph_hankel1_ratio(keep, 2.0 * k * R, k * R, rr.data());
   std::vector<double> yy(sh_count(keep));
@@ -479,11 +506,10 @@ ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fi
       for (int m = -l; m <= l; ++m) sl += a[sh_index(l, m)] * yy[sh_index(l, m)];
       p += rr[l] * sl;
     }
-    num += std::norm(p - direct[i]);
-    den += std::norm(direct[i]);
+    num += std::norm(p - ref[i]);
+    den += std::norm(ref[i]);
   }
   mt.expansion_error = den > 0 ? static_cast<float>(std::sqrt(num / den)) : 0.0f;
-  if (times) times->expand += seconds_since(t0);
   return mt;
 }
 
@@ -493,6 +519,8 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
   const std::size_t nm = bank.mode_count(), nv = bank.vertices.size();
   if (nv != surface.mesh().vertices.size() || bank.shapes.size() != nm * nv * 3)
     throw InternalError("transfer: the bank's shapes do not match the surface");
+  if (resolve_method(surface, o) == AcousticOptions::Method::Bem)
+    return compute_transfer_bem(surface, bank, o, times, progress);
   Transfer out;
   out.centre = surface.centre();
   out.radius = surface.radius();

@@ -13,12 +13,21 @@
 
 #include "chladni/core/soundbank.hpp"
 #include "chladni/core/transfer.hpp"
+#include "chladni/precompute/bem.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/transfer_kernels.hpp"
 
 namespace chladni::precompute {
 
 struct AcousticOptions {
+  /// bem: Burton-Miller boundary elements on the surface (docs/transfer.md); sources: the
+  /// equivalent-source fit; auto: BEM up to bem_auto_elements surface triangles, else sources.
+  enum class Method { Auto, Bem, Sources };
+  Method method = Method::Auto;
+  /// The dense BEM system costs 16 N^2 bytes and an O(N^2) assembly per mode: above this many
+  /// triangles auto takes the equivalent-source fit (docs/transfer.md, PERFORMANCE.md).
+  std::size_t bem_auto_elements = 2500;
+  BemOptions bem;
   double sound_speed = 343.0;  ///< m/s
   double air_density = 1.204;  ///< kg/m^3 (air at 20 C)
   int order = 0;               ///< fixed expansion order L; 0: per mode from k and the sources
@@ -36,9 +45,9 @@ struct AcousticOptions {
   double regularization = 1e-6;  ///< Tikhonov weight on column-normalized sources
   enum class Solver { Qr, Normal };
   Solver solver = Solver::Normal;  ///< normal equations (zherk + Cholesky) or QR of the stack
-  double truncation = 1e-3;    ///< drop the orders carrying less than this at r = 2R
-  int threads = 0;             ///< modes fitted in parallel (0: all cores)
-  void validate() const;       ///< throws InputError naming the bad field
+  double truncation = 1e-3;        ///< drop the orders carrying less than this at r = 2R
+  int threads = 0;                 ///< modes fitted in parallel (0: all cores)
+  void validate() const;           ///< throws InputError naming the bad field
 };
 
 /// Normal velocity (m/s, complex amplitude) at barycentric point `b` of triangle `t`.
@@ -57,6 +66,9 @@ class RadiatingSurface {
   double area() const { return area_; }
   const Vec3& face_normal(uint32_t t) const { return face_normal_[t]; }
   const std::vector<Vec3>& vertex_normals() const { return vertex_normal_; }
+  /// Up to `count` spread points inside the body (absolute), each at most half the local wall
+  /// thickness below a vertex and at least `min_depth` deep.
+  std::vector<Vec3> interior_points(std::size_t count, double min_depth) const;
 
   /// Normal velocity interpolated from per-vertex values (m/s).
   NormalVelocity from_vertex_values(std::span<const std::complex<double>> un) const;
@@ -94,9 +106,9 @@ struct SourceFit {
 
 /// Seconds spent per stage, summed over calls.
 struct TransferTimes {
-  double matrix = 0;  ///< collocation and held-out matrices (the kernels)
-  double solve = 0;   ///< regularized least squares (CPU)
-  double expand = 0;  ///< re-expansion into a_lm and its check at 2R
+  double matrix = 0;  ///< collocation and held-out matrices (the kernels); BEM: assembly
+  double solve = 0;   ///< regularized least squares (CPU); BEM: LU and GMRES
+  double expand = 0;  ///< re-expansion into a_lm and its check at 2R; BEM: quadrature, checks
 };
 
 SourceFit fit_sources(const RadiatingSurface& surface, double k, const NormalVelocity& un,
@@ -115,6 +127,36 @@ std::vector<std::complex<double>> source_pressure(const RadiatingSurface& surfac
 ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fit,
                             const AcousticOptions& options, TransferKernels& kernels,
                             std::vector<std::complex<double>>& a, TransferTimes* times = nullptr);
+
+/// Trims a full-order expansion a (a_lm = c_lm h_l(kR), order L) to the orders that carry more
+/// than options.truncation of the pressure at 2R and measures it against `direct` (the pressure
+/// at points given relative to the centre) on that sphere.
+ModeTransfer finish_expansion(
+    const RadiatingSurface& surface, double k, int L, std::vector<std::complex<double>>& a,
+    const AcousticOptions& options,
+    const std::function<void(const std::vector<Vec3>&, std::complex<double>*)>& direct);
+
+/// Expansion order for wavenumber k on a surface of radius R: kR + 2 (kR)^(1/3) + 8, capped.
+int expansion_order(double k, double radius, const AcousticOptions& options);
+
+/// One mode by boundary elements on `mesh` (the surface's own triangles): dp/dn per element from
+/// `un`, the Burton-Miller solve, c_lm by quadrature, trimmed and checked. Optionally returns the
+/// surface pressure and dp/dn per element.
+ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, BemSolver& solver,
+                          double k, const NormalVelocity& un, const AcousticOptions& options,
+                          std::vector<std::complex<double>>& a, TransferTimes* times = nullptr,
+                          std::vector<std::complex<double>>* pressure = nullptr,
+                          std::vector<std::complex<double>>* dpdn = nullptr);
+
+/// The method compute_transfer uses for this surface under these options.
+AcousticOptions::Method resolve_method(const RadiatingSurface& surface,
+                                       const AcousticOptions& options);
+
+/// compute_transfer's BEM path: one system per mode on the bank's surface, modes in ascending
+/// frequency so each GMRES solve is preconditioned by the LU of a nearby frequency.
+Transfer compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
+                              const AcousticOptions& options, TransferTimes* times = nullptr,
+                              const std::function<void(std::size_t, std::size_t)>& progress = {});
 
 /// Transfer of every mode of a bank whose surface is `surface` (the bank's SURF). `progress`
 /// gets (modes done, modes total).

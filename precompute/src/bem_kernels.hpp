@@ -1,0 +1,72 @@
+#pragma once
+// The four Helmholtz kernels of the Burton-Miller equation at one pair of points, and the
+// triangle rules the element integrals use. Internal to the BEM files.
+#include <array>
+#include <cmath>
+#include <complex>
+#include <numbers>
+
+#include "chladni/core/vec3.hpp"
+
+namespace chladni::precompute::bem_detail {
+
+using cd = std::complex<double>;
+
+/// Adds w x {G, dG/dn_y, dG/dn_x, d2G/dn_x dn_y, its static (k = 0) part} at x (normal nx),
+/// y (normal ny), x != y.
+/// With r = x - y, R = |r|, G = e^(ikR)/(4 pi R):
+///   dG/dn_y = G (1 - ikR) (r.n_y) / R^2,   dG/dn_x = -G (1 - ikR) (r.n_x) / R^2,
+///   d2G/dn_x dn_y = G / R^2 [n_x.n_y (1 - ikR) - (r.n_x)(r.n_y)/R^2 (3 - 3ikR - k^2 R^2)].
+inline void add_kernels(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3& ny, double k,
+                        double w, cd* acc) {
+  const double r0 = x[0] - y[0], r1 = x[1] - y[1], r2 = x[2] - y[2];
+  const double R2 = r0 * r0 + r1 * r1 + r2 * r2, R = std::sqrt(R2), inv2 = 1.0 / R2;
+  const double kr = k * R;
+  const double s = w / (4.0 * std::numbers::pi * R);
+  const cd g(s * std::cos(kr), s * std::sin(kr));
+  const double rny = r0 * ny[0] + r1 * ny[1] + r2 * ny[2];
+  const double rnx = r0 * nx[0] + r1 * nx[1] + r2 * nx[2];
+  const double nn = nx[0] * ny[0] + nx[1] * ny[1] + nx[2] * ny[2];
+  const cd one_m(1.0, -kr);        // 1 - ikR
+  const cd gp = g * one_m * inv2;  // G (1 - ikR) / R^2
+  acc[0] += g;
+  acc[1] += gp * rny;
+  acc[2] -= gp * rnx;
+  acc[3] += g * inv2 * (nn * one_m - rnx * rny * inv2 * cd(3.0 - kr * kr, -3.0 * kr));
+  acc[4] += s * inv2 * (nn - 3.0 * rnx * rny * inv2);
+}
+
+struct Rule {
+  int n;
+  std::array<std::array<double, 3>, 7> b;  // barycentric points
+  std::array<double, 7> w;                 // weights summing to 1
+};
+
+/// Centroid (degree 1), three interior points (degree 2), Dunavant's 7 points (degree 5).
+inline const Rule& rule(int points) {
+  static const Rule one{1, {{{1.0 / 3, 1.0 / 3, 1.0 / 3}}}, {1.0}};
+  static const Rule three{
+      3,
+      {{{2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}}},
+      {1.0 / 3, 1.0 / 3, 1.0 / 3}};
+  constexpr double a1 = 0.059715871789770, b1 = 0.470142064105115, w1 = 0.132394152788506;
+  constexpr double a2 = 0.797426985353087, b2 = 0.101286507323456, w2 = 0.125939180544827;
+  static const Rule seven{7,
+                          {{{1.0 / 3, 1.0 / 3, 1.0 / 3},
+                            {a1, b1, b1},
+                            {b1, a1, b1},
+                            {b1, b1, a1},
+                            {a2, b2, b2},
+                            {b2, a2, b2},
+                            {b2, b2, a2}}},
+                          {0.225, w1, w1, w1, w2, w2, w2}};
+  return points == 1 ? one : points == 3 ? three : seven;
+}
+
+inline Vec3 barycentric(const Vec3& a, const Vec3& b, const Vec3& c,
+                        const std::array<double, 3>& l) {
+  return {l[0] * a[0] + l[1] * b[0] + l[2] * c[0], l[0] * a[1] + l[1] * b[1] + l[2] * c[1],
+          l[0] * a[2] + l[1] * b[2] + l[2] * c[2]};
+}
+
+}  // namespace chladni::precompute::bem_detail

@@ -1,0 +1,130 @@
+// Acoustic transfer by boundary elements: per mode the Burton-Miller solve on the surface, the
+// multipole coefficients by quadrature, the expansion's truncation check and an interior
+// null-field check of the surface solution.
+#include <chrono>
+#include <cmath>
+
+#include "chladni/core/error.hpp"
+#include "chladni/core/spherical.hpp"
+#include "chladni/precompute/acoustic_transfer.hpp"
+
+namespace chladni::precompute {
+namespace {
+
+using cd = std::complex<double>;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The representation p(x) = int p dG/dn_y - q G vanishes inside the body: its size there,
+// against the size of either term, measures how consistent the surface pressure is with the data.
+double null_field_error(const BemMesh& mesh, double k, const std::vector<cd>& p,
+                        const std::vector<cd>& q, const std::vector<Vec3>& points,
+                        const BemOptions& o) {
+  if (points.empty()) return 0.0;
+  const std::vector<cd> zero(p.size(), cd(0.0));
+  const std::vector<cd> dbl = bem_field(mesh, k, p, zero, points, o);
+  const std::vector<cd> sgl = bem_field(mesh, k, zero, q, points, o);  // -int q G
+  double num = 0, den = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    num += std::norm(dbl[i] + sgl[i]);
+    den += std::max(std::norm(dbl[i]), std::norm(sgl[i]));
+  }
+  return den > 0 ? std::sqrt(num / den) : 0.0;
+}
+
+}  // namespace
+
+AcousticOptions::Method resolve_method(const RadiatingSurface& surface, const AcousticOptions& o) {
+  if (o.method != AcousticOptions::Method::Auto) return o.method;
+  return surface.mesh().triangles.size() <= o.bem_auto_elements ? AcousticOptions::Method::Bem
+                                                                : AcousticOptions::Method::Sources;
+}
+
+ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, BemSolver& solver,
+                          double k, const NormalVelocity& un, const AcousticOptions& o,
+                          std::vector<cd>& a, TransferTimes* times, std::vector<cd>* pressure,
+                          std::vector<cd>* dpdn) {
+  const std::size_t n = mesh.elements();
+  if (n != surface.mesh().triangles.size())
+    throw InternalError("bem: the boundary mesh is not the surface's");
+  // dp/dn = i omega rho0 u_n, averaged over each element (3 points).
+  const cd neumann(0.0, k * o.sound_speed * o.air_density);
+  std::vector<cd> q(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const auto t = static_cast<uint32_t>(j);
+    q[j] = neumann *
+           (un(t, {2.0 / 3, 1.0 / 6, 1.0 / 6}) + un(t, {1.0 / 6, 2.0 / 3, 1.0 / 6}) +
+            un(t, {1.0 / 6, 1.0 / 6, 2.0 / 3})) /
+           3.0;
+  }
+  const BemSolver::Times before = solver.times();
+  const BemSolver::Result res = solver.solve(k, q);
+  if (times) {
+    const BemSolver::Times& after = solver.times();
+    times->matrix += after.assembly - before.assembly;
+    times->solve += after.factorization - before.factorization + after.iteration - before.iteration;
+  }
+
+  const auto t0 = std::chrono::steady_clock::now();
+  const double R = surface.radius();
+  const int L = expansion_order(k, R, o);
+  a = bem_multipoles(mesh, k, surface.centre(), L, res.pressure, q, o.bem.threads);
+  std::vector<cd> h(static_cast<std::size_t>(L) + 1);
+  sph_hankel1(L, k * R, h.data());
+  for (int l = 0; l <= L; ++l)
+    for (int m = -l; m <= l; ++m) a[sh_index(l, m)] *= h[l];
+  ModeTransfer mt =
+      finish_expansion(surface, k, L, a, o, [&](const std::vector<Vec3>& rel, cd* out) {
+        std::vector<Vec3> pts(rel.size());
+        for (std::size_t i = 0; i < rel.size(); ++i) pts[i] = add(rel[i], surface.centre());
+        const std::vector<cd> f = bem_field(mesh, k, res.pressure, q, pts, o.bem);
+        std::copy(f.begin(), f.end(), out);
+      });
+  mt.method = TransferMethod::Bem;
+  mt.sources = static_cast<uint32_t>(n);
+  mt.iterations = static_cast<uint16_t>(std::min(res.iterations, 65535));
+  mt.fit_residual = static_cast<float>(res.residual);
+  // Interior points at least 1.5 elements from every element centroid (near the surface the
+  // field of piecewise-constant data is not meant to be accurate).
+  std::vector<Vec3> inside;
+  const double clearance = 1.5 * mesh.mean_size();
+  for (const Vec3& x : surface.interior_points(64, clearance)) {
+    bool clear = true;
+    for (std::size_t j = 0; j < n && clear; ++j)
+      clear = dot(sub(x, mesh.centroid[j]), sub(x, mesh.centroid[j])) >= clearance * clearance;
+    if (clear && inside.size() < 16) inside.push_back(x);
+  }
+  mt.held_out_error = static_cast<float>(null_field_error(mesh, k, res.pressure, q, inside, o.bem));
+  if (times) times->expand += seconds_since(t0);
+  if (pressure) *pressure = res.pressure;
+  if (dpdn) *dpdn = std::move(q);
+  return mt;
+}
+
+Transfer compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
+                              const AcousticOptions& o, TransferTimes* times,
+                              const std::function<void(std::size_t, std::size_t)>& progress) {
+  const std::size_t nm = bank.mode_count(), nv = bank.vertices.size();
+  Transfer out;
+  out.centre = surface.centre();
+  out.radius = surface.radius();
+  out.sound_speed = o.sound_speed;
+  out.air_density = o.air_density;
+  const BemMesh mesh(surface.mesh());
+  BemSolver solver(mesh, o.bem);
+  std::vector<cd> a;
+  for (std::size_t i = 0; i < nm; ++i) {  // ascending frequency (MODE is sorted)
+    const double wd2 = bank.omega[i] * bank.omega[i] - bank.decay[i] * bank.decay[i];
+    const double omega = std::sqrt(std::max(wd2, 0.0));  // radiates at the damped frequency
+    const NormalVelocity un = surface.from_mode_shape(bank.shapes.data() + i * nv * 3, omega);
+    const ModeTransfer mt =
+        bem_transfer(surface, mesh, solver, omega / o.sound_speed, un, o, a, times);
+    out.add_mode(mt, a);
+    if (progress) progress(i + 1, nm);
+  }
+  return out;
+}
+
+}  // namespace chladni::precompute
