@@ -225,33 +225,35 @@ TEST(CliRadiate, SphereHarmonicMatchesTheExactSolution) {
                                                     "# x y z\n0 0 0.25\n0.2 0.1 -0.3\n0.5 0 0.1\n");
   const std::string json = chladni::test::temp_path("chladni_radiate.json");
   const double a = 0.1, f = 900, c = 343.0, rho = 1.204, k = 2 * M_PI * f / c;
-  for (const char* via : {"sources", "multipole"}) {
-    const Result r = run("radiate " CHLADNI_SOURCE_DIR
-                         "/meshes/sphere.obj --freq 900 --pattern "
-                         "sphere-harmonic:l=2,m=0 --points " +
-                         pts + " --json " + json + " --via " + via);
-    ASSERT_EQ(r.code, 0) << r.output;
-    const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
-    ASSERT_EQ(j["points"].size(), 3u);
-    for (const auto& p : j["points"]) {
-      const double x = p["x"], y = p["y"], z = p["z"];
-      const double r0 = std::sqrt(x * x + y * y + z * z), ct = z / r0;
-      const std::complex<double> h =
-          std::sph_bessel(2, k * r0) + std::complex<double>(0, 1) * std::sph_neumann(2, k * r0);
-      // h_2'(x) = h_1(x) - 3/x h_2(x)
-      const double ka = k * a;
-      const std::complex<double> h1a =
-          std::sph_bessel(1, ka) + std::complex<double>(0, 1) * std::sph_neumann(1, ka);
-      const std::complex<double> h2a =
-          std::sph_bessel(2, ka) + std::complex<double>(0, 1) * std::sph_neumann(2, ka);
-      const std::complex<double> exact =
-          std::complex<double>(0, rho * c) * h / (h1a - 3.0 / ka * h2a) * std::legendre(2, ct);
-      const std::complex<double> got(p["pressure"]["re"].get<double>(),
-                                     p["pressure"]["im"].get<double>());
-      EXPECT_LT(std::abs(got - exact), 0.02 * std::abs(exact))
-          << via << " at " << x << " " << y << " " << z;
+  for (const std::string via : {"surface", "multipole"})
+    for (const std::string method : {"sources", "bem"}) {
+      const Result r = run("radiate " CHLADNI_SOURCE_DIR
+                           "/meshes/sphere.obj --freq 900 --pattern "
+                           "sphere-harmonic:l=2,m=0 --points " +
+                           pts + " --json " + json + " --via " + via + " --method " + method);
+      ASSERT_EQ(r.code, 0) << r.output;
+      const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
+      EXPECT_EQ(j["method"], method);
+      ASSERT_EQ(j["points"].size(), 3u);
+      for (const auto& p : j["points"]) {
+        const double x = p["x"], y = p["y"], z = p["z"];
+        const double r0 = std::sqrt(x * x + y * y + z * z), ct = z / r0;
+        const std::complex<double> h =
+            std::sph_bessel(2, k * r0) + std::complex<double>(0, 1) * std::sph_neumann(2, k * r0);
+        // h_2'(x) = h_1(x) - 3/x h_2(x)
+        const double ka = k * a;
+        const std::complex<double> h1a =
+            std::sph_bessel(1, ka) + std::complex<double>(0, 1) * std::sph_neumann(1, ka);
+        const std::complex<double> h2a =
+            std::sph_bessel(2, ka) + std::complex<double>(0, 1) * std::sph_neumann(2, ka);
+        const std::complex<double> exact =
+            std::complex<double>(0, rho * c) * h / (h1a - 3.0 / ka * h2a) * std::legendre(2, ct);
+        const std::complex<double> got(p["pressure"]["re"].get<double>(),
+                                       p["pressure"]["im"].get<double>());
+        EXPECT_LT(std::abs(got - exact), 0.02 * std::abs(exact))
+            << method << " " << via << " at " << x << " " << y << " " << z;
+      }
     }
-  }
 }
 
 TEST(CliRadiate, BadInputNamesFileAndLine) {
@@ -269,6 +271,10 @@ TEST(CliRadiate, BadInputNamesFileAndLine) {
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("2 velocity values, but"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("has 2562 vertices"), std::string::npos) << r.output;
+  r = run("radiate " + sphere + " --freq 500 --pattern uniform --method fmm --points " + good);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--method: unknown method 'fmm' (auto, bem, sources)"), std::string::npos)
+      << r.output;
   r = run("radiate " + sphere + " --freq 500 --pattern sphere-harmonic:l=2,m=5 --points " + good);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("|m| <= l"), std::string::npos) << r.output;
