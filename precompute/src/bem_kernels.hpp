@@ -17,6 +17,7 @@ using cd = std::complex<double>;
 /// With r = x - y, R = |r|, G = e^(ikR)/(4 pi R):
 ///   dG/dn_y = G (1 - ikR) (r.n_y) / R^2,   dG/dn_x = -G (1 - ikR) (r.n_x) / R^2,
 ///   d2G/dn_x dn_y = G / R^2 [n_x.n_y (1 - ikR) - (r.n_x)(r.n_y)/R^2 (3 - 3ikR - k^2 R^2)].
+template <bool with_static = true>
 inline void add_kernels(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3& ny, double k,
                         double w, cd* acc) {
   const double r0 = x[0] - y[0], r1 = x[1] - y[1], r2 = x[2] - y[2];
@@ -33,7 +34,32 @@ inline void add_kernels(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3
   acc[1] += gp * rny;
   acc[2] -= gp * rnx;
   acc[3] += g * inv2 * (nn * one_m - rnx * rny * inv2 * cd(3.0 - kr * kr, -3.0 * kr));
-  acc[4] += s * inv2 * (nn - 3.0 * rnx * rny * inv2);
+  if constexpr (with_static) acc[4] += s * inv2 * (nn - 3.0 * rnx * rny * inv2);
+}
+
+/// Adds w x the dynamic remainders {G - G0, dG/dn_y - its static part, dG/dn_x - ..., d2G/dn dn -
+/// ...} (G0 = 1/(4 pi R)): bounded or O(k^2/R), so low-order rules integrate them on near
+/// elements whose static parts were integrated once, adaptively. With e = e^(ikR),
+/// a = (1 - ikR) e - 1 and b = (3 - 3ikR - k^2 R^2) e - 3 (both O(k^2 R^2), written without
+/// cancelling leading terms): G - G0 = (e - 1)/(4 pi R), dG/dn_y - . = a (r.n_y)/(4 pi R^3),
+/// dG/dn_x - . = -a (r.n_x)/(4 pi R^3), d2G - . = [n_x.n_y a - (r.n_x)(r.n_y)/R^2 b]/(4 pi R^3).
+inline void add_dynamic(const Vec3& x, const Vec3& nx, const Vec3& y, const Vec3& ny, double k,
+                        double w, cd* acc) {
+  const double r0 = x[0] - y[0], r1 = x[1] - y[1], r2 = x[2] - y[2];
+  const double R2 = r0 * r0 + r1 * r1 + r2 * r2, R = std::sqrt(R2);
+  const double kr = k * R, c = std::cos(kr), s = std::sin(kr), h = std::sin(0.5 * kr);
+  const double f = w / (4.0 * std::numbers::pi * R), f3 = f / R2;
+  const cd em1(-2.0 * h * h, s);                         // e - 1
+  const cd a(-2.0 * h * h + kr * s, s - kr * c);         // (1 - ikR) e - 1
+  const cd b(-6.0 * h * h - kr * kr * c + 3.0 * kr * s,  // (3 - 3ikR - k^2R^2) e - 3
+             3.0 * (s - kr * c) - kr * kr * s);
+  const double rny = r0 * ny[0] + r1 * ny[1] + r2 * ny[2];
+  const double rnx = r0 * nx[0] + r1 * nx[1] + r2 * nx[2];
+  const double nn = nx[0] * ny[0] + nx[1] * ny[1] + nx[2] * ny[2];
+  acc[0] += f * em1;
+  acc[1] += f3 * rny * a;
+  acc[2] -= f3 * rnx * a;
+  acc[3] += f3 * (nn * a - rnx * rny / R2 * b);
 }
 
 struct Rule {

@@ -31,9 +31,55 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
 // #4013): every buffer handed to LAPACK carries this many spare entries.
 constexpr std::size_t kPad = 64;
 
-// Row-major A (A[i * n + j]: collocation point i, element j) and b = B q, in one pass.
-void assemble(const BemMesh& m, double k, std::span<const cd> q, const BemOptions& o,
-              std::vector<cd>& A, std::vector<cd>& b) {
+}  // namespace
+
+// The frequency-independent part of the system, computed once per mesh: for each collocation
+// point the static integrals over the elements closer than far_ratio sizes (adaptive near the
+// point), and the sum of the static hypersingular entries of its row (for the singularity
+// subtraction below).
+struct BemSolver::NearCache {
+  struct Entry {
+    uint32_t j;
+    double single, dbl, adjoint, hyper;
+  };
+  std::vector<std::vector<Entry>> rows;
+  std::vector<double> static_sum;
+
+  NearCache(const BemMesh& m, const BemOptions& o) : rows(m.elements()), static_sum(m.elements()) {
+    const std::size_t n = m.elements();
+    parallel_for(n, o.threads, [&](std::size_t r0, std::size_t r1) {
+      for (std::size_t i = r0; i < r1; ++i) {
+        const Vec3 &x = m.centroid[i], &nx = m.normal[i];
+        double sum = 0;
+        for (std::size_t j = 0; j < n; ++j) {
+          if (j == i) continue;
+          const double d2 = dot(sub(x, m.centroid[j]), sub(x, m.centroid[j]));
+          const double far = o.far_ratio * m.size[j];
+          if (d2 > far * far) {
+            cd acc[5] = {0, 0, 0, 0, 0};
+            add_kernels(x, nx, m.centroid[j], m.normal[j], 0.0, m.area[j], acc);
+            sum += acc[4].real();
+          } else {
+            const ElementIntegrals e = element_integrals(m, uint32_t(j), x, nx, 0.0, o);
+            rows[i].push_back(
+                {uint32_t(j), e.single.real(), e.dbl.real(), e.adjoint.real(), e.hyper_static});
+            sum += e.hyper_static;
+          }
+        }
+        static_sum[i] = sum;
+      }
+    });
+  }
+};
+
+namespace {
+
+// Row-major A (A[i * n + j]: collocation point i, element j) and b = B q, in one pass. Far
+// elements: the full kernels at the centroid; near ones: the cached static integrals plus the
+// dynamic remainders (smooth, O(k^2 R^2) against the static parts) by 3 points within
+// near_ratio sizes, else 1.
+void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std::span<const cd> q,
+              const BemOptions& o, std::vector<cd>& A, std::vector<cd>& b) {
   const std::size_t n = m.elements();
   A.assign(n * n + kPad, cd(0.0));
   b.assign(n, cd(0.0));
@@ -47,34 +93,36 @@ void assemble(const BemMesh& m, double k, std::span<const cd> q, const BemOption
       const Vec3 &x = m.centroid[i], &nx = m.normal[i];
       cd* row = A.data() + i * n;
       cd bi = -0.5 * alpha * q[i];
-      // Singularity subtraction: the static hypersingular operator maps a constant density to 0
-      // on a closed surface (the Laplace double layer of a constant is piecewise constant), so
-      // its diagonal is minus the sum of the row's other static entries. This removes the O(h)
-      // error flat elements make on curved surfaces; only the weakly singular dynamic part of
-      // the self term comes from the closed form.
-      double static_sum = 0;
-      cd self_dynamic = 0;
+      const auto& near = cache.rows[i];
+      std::size_t next = 0;
       for (std::size_t j = 0; j < n; ++j) {
-        const double d2 = dot(sub(x, m.centroid[j]), sub(x, m.centroid[j]));
-        const double far = o.far_ratio * m.size[j];
         cd acc[5] = {0, 0, 0, 0, 0};
-        if (d2 > far * far) {
-          add_kernels(x, nx, m.centroid[j], m.normal[j], k, m.area[j], acc);
-        } else {
-          const ElementIntegrals e = element_integrals(m, uint32_t(j), x, nx, k, o);
+        if (next < near.size() && near[next].j == j) {
+          const auto& e = near[next++];
           acc[0] = e.single, acc[1] = e.dbl, acc[2] = e.adjoint, acc[3] = e.hyper;
-          acc[4] = e.hyper_static;
-        }
-        if (j == i) {
-          self_dynamic = acc[3] - acc[4];
-          acc[3] = 0;
+          const double d = norm(sub(x, m.centroid[j]));
+          const auto& t = m.triangles[j];
+          const Rule& r = rule(d < o.near_ratio * m.size[j] ? 3 : 1);
+          for (int p = 0; p < r.n; ++p)
+            add_dynamic(x, nx,
+                        barycentric(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.b[p]),
+                        m.normal[j], k, r.w[p] * m.area[j], acc);
+        } else if (j == i) {
+          // Singularity subtraction: the static hypersingular operator maps a constant density
+          // to 0 on a closed surface (the Laplace double layer of a constant is piecewise
+          // constant), so its diagonal is minus the sum of the row's other static entries. This
+          // removes the O(h) error flat elements make on curved surfaces; only the weakly
+          // singular dynamic part of the self term comes from the closed form.
+          const ElementIntegrals e = element_integrals(m, uint32_t(i), x, nx, k, o);
+          acc[0] = e.single;
+          acc[3] = e.hyper - e.hyper_static - cache.static_sum[i];
         } else {
-          static_sum += acc[4].real();
+          add_kernels<false>(x, nx, m.centroid[j], m.normal[j], k, m.area[j], acc);
         }
         row[j] = -acc[1] - alpha * acc[3];
         bi -= (acc[0] + alpha * acc[2]) * q[j];
       }
-      row[i] += 0.5 - alpha * (self_dynamic - static_sum);
+      row[i] += 0.5;
       b[i] = bi;
     }
   });
@@ -136,8 +184,9 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   if (!(k > 0) || !std::isfinite(k)) throw InputError("bem: wavenumber must be finite and > 0");
   if (q.size() != n) throw InternalError("bem: one normal derivative per element expected");
   auto t0 = std::chrono::steady_clock::now();
+  if (!near_) near_ = std::make_unique<NearCache>(mesh_, options_);
   std::vector<cd> A, b;
-  assemble(mesh_, k, q, options_, A, b);
+  assemble(mesh_, *near_, k, q, options_, A, b);
   times_.assembly += seconds_since(t0);
 
   Result res;

@@ -13,6 +13,7 @@
 #include <array>
 #include <complex>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -87,11 +88,14 @@ class BemSolver {
   const Times& times() const { return times_; }
   const BemMesh& mesh() const { return mesh_; }
 
+  struct NearCache;  ///< frequency-independent static near-field integrals
+
  private:
   struct Lu;
   const BemMesh& mesh_;
   BemOptions options_;
   Lu* lu_ = nullptr;
+  std::unique_ptr<NearCache> near_;
   Times times_;
 };
 
