@@ -149,8 +149,9 @@ void run_radiate(const RadiateArgs& a) {
   std::unique_ptr<precompute::TransferKernels> kernels =
       ctx ? precompute::make_gpu_transfer_kernels(ctx) : precompute::make_cpu_transfer_kernels();
   o.method = parse_transfer_method(a.method, "--method");
-  const bool bem = precompute::resolve_method(surf, o) == precompute::AcousticOptions::Method::Bem;
   const double k = 2 * std::numbers::pi * a.freq / o.sound_speed;
+  const bool bem =
+      precompute::resolve_method(surf, k, o) == precompute::AcousticOptions::Method::Bem;
   const precompute::NormalVelocity un_of = surf.from_vertex_values(un);
   std::vector<cd> a_lm, surface_p, surface_q;
   precompute::SourceFit fit;

@@ -8,6 +8,8 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/soundbank.hpp"
+#include "chladni/core/spherical.hpp"
+#include "fem_fixtures.hpp"
 
 using namespace chladni;
 
@@ -243,4 +245,47 @@ TEST(Soundbank, ModalModelCarriesShapesAndRadiation) {
   EXPECT_EQ(k.transfer->modes[0].order, 2u);
   EXPECT_EQ(k.transfer->coefficients.size(), 9u);
   EXPECT_EQ(k.transfer->coefficients[4], m.transfer->coefficients_of(1)[4]);
+}
+
+TEST(Soundbank, CompactSourceGainHasTheQuadrupoleTerm) {
+  // A sphere whose mode has normal displacement P_2(cos t): no net volume, no dipole moment. Its
+  // volume-velocity far field is 4 pi a^2 j_2(ka) P_2 per unit displacement (plane-wave
+  // expansion), rms over directions sqrt(1/5) of that; at ka = 0.1 the Taylor quadrupole is it.
+  const double a = 0.1, k = 1.0;
+  const auto sphere = test::icosphere(a, 3);
+  Soundbank b;
+  b.vertices = sphere.vertices;
+  b.triangles = sphere.triangles;
+  b.omega = {k * 343.0};
+  b.decay = {1.0};
+  for (const Vec3& v : b.vertices) {
+    const Vec3 n = scale(v, 1.0 / norm(v));
+    b.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
+    const double p2 = std::legendre(2u, n[2]);
+    for (int c = 0; c < 3; ++c) b.shapes.push_back(float(n[c] * p2));
+  }
+  const ModalModel m = to_modal_model(b, "p2");
+  double j2[3];
+  sph_bessel_j(2, k * a, j2);
+  const double want = 1.204 / (4 * std::numbers::pi) * 4 * std::numbers::pi * a * a * j2[2] *
+                      std::sqrt(1.0 / 5);
+  EXPECT_NEAR(m.radiation[0], want, 0.03 * want);
+}
+
+TEST(Soundbank, TransferMethodRoundTripsAndUnknownOnesAreRefused) {
+  Soundbank b = small_bank();
+  b.transfer->modes[1].method = TransferMethod::Bem;
+  b.transfer->modes[1].iterations = 17;
+  const Soundbank r = parse_soundbank(serialize_soundbank(b), "mem");
+  EXPECT_EQ(r.transfer->modes[0].method, TransferMethod::Sources);
+  EXPECT_EQ(r.transfer->modes[1].method, TransferMethod::Bem);
+  EXPECT_EQ(r.transfer->modes[1].iterations, 17);
+  b.transfer->modes[0].method = static_cast<TransferMethod>(7);
+  try {
+    parse_soundbank(serialize_soundbank(b), "mem");
+    FAIL() << "accepted an unknown transfer method";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("mode 0 has unknown transfer method 7"), std::string::npos)
+        << e.what();
+  }
 }

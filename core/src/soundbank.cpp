@@ -395,18 +395,33 @@ ModalModel to_modal_model(const Soundbank& b, const std::string& name) {
     for (uint32_t v : t)
       for (int k = 0; k < 3; ++k) an[v][k] += n2[k] / 6.0;  // (area vector) / 3 per corner
   }
+  // Far field of the surface's volume velocity to second order in k (Taylor of e^(-ik x.y)):
+  // A(x) = Q - ik x.D - (k^2/2) x.T.x with Q = int u_n, D = int u_n y, T = int u_n y y^T about
+  // the centroid; radiation is the rms of rho0 |A| / (4 pi) over directions:
+  // <|A|^2> = Q^2 + k^2 |D|^2 / 3 - k^2 Q tr T / 3 + k^4 (2 tr T^2 + (tr T)^2) / 60. The
+  // quadrupole keeps modes with no net volume or dipole moment (a bowl's (2,0) pairs) audible.
   for (std::size_t i = 0; i < b.omega.size(); ++i) {
-    double Q = 0;
+    double Q = 0, T[3][3] = {};
     Vec3 D{0, 0, 0};
     for (std::size_t v = 0; v < nv; ++v) {
       const Vec3& s = m.shapes[i * nv + v];
       const double un = s[0] * an[v][0] + s[1] * an[v][1] + s[2] * an[v][2];
+      const Vec3 y = sub(b.vertices[v], c);
       Q += un;
-      for (int k = 0; k < 3; ++k) D[k] += (b.vertices[v][k] - c[k]) * un;
+      for (int k = 0; k < 3; ++k) {
+        D[k] += y[k] * un;
+        for (int l = 0; l < 3; ++l) T[k][l] += y[k] * y[l] * un;
+      }
     }
-    const double k = b.omega[i] / c0;
+    const double k = b.omega[i] / c0, k2 = k * k;
     const double d2 = D[0] * D[0] + D[1] * D[1] + D[2] * D[2];
-    m.radiation.push_back(rho0 / (4 * std::numbers::pi) * std::sqrt(Q * Q + k * k * d2 / 3.0));
+    const double tr = T[0][0] + T[1][1] + T[2][2];
+    double tt = 0;
+    for (int r = 0; r < 3; ++r)
+      for (int col = 0; col < 3; ++col) tt += T[r][col] * T[col][r];
+    const double ms =
+        Q * Q + k2 * d2 / 3.0 - k2 * Q * tr / 3.0 + k2 * k2 * (2 * tt + tr * tr) / 60.0;
+    m.radiation.push_back(rho0 / (4 * std::numbers::pi) * std::sqrt(std::max(ms, 0.0)));
   }
   return m;
 }

@@ -190,6 +190,10 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
     for (uint32_t v : tri) vertex_normal_[v] = add(vertex_normal_[v], n2);
   }
   if (!(area_ > 0)) throw InputError("transfer: the surface has no area");
+  for (const auto& tri : mesh.triangles) {
+    const Vec3 &a = mesh.vertices[tri[0]], &b = mesh.vertices[tri[1]], &c = mesh.vertices[tri[2]];
+    mean_size_ += std::sqrt(std::max({dist2(a, b), dist2(b, c), dist2(c, a)})) / double(nt);
+  }
   for (Vec3& n : vertex_normal_) {
     const double len = std::sqrt(dot(n, n));
     n = len > 0 ? scale(n, 1.0 / len) : Vec3{0, 0, 1};
@@ -519,8 +523,6 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
   const std::size_t nm = bank.mode_count(), nv = bank.vertices.size();
   if (nv != surface.mesh().vertices.size() || bank.shapes.size() != nm * nv * 3)
     throw InternalError("transfer: the bank's shapes do not match the surface");
-  if (resolve_method(surface, o) == AcousticOptions::Method::Bem)
-    return compute_transfer_bem(surface, bank, o, times, progress);
   Transfer out;
   out.centre = surface.centre();
   out.radius = surface.radius();
@@ -549,23 +551,36 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
     std::string name() const override { return inner.name(); }
   } locked(kernels, kernel_mutex);
   TransferKernels& shared = kernels.thread_safe() ? kernels : static_cast<TransferKernels&>(locked);
+  // Per mode: boundary elements where the surface resolves the wavelength (auto), else sources.
+  std::vector<std::size_t> by_bem, by_sources;
+  for (std::size_t i = 0; i < nm; ++i) {
+    const double wd2 = bank.omega[i] * bank.omega[i] - bank.decay[i] * bank.decay[i];
+    const double k = std::sqrt(std::max(wd2, 0.0)) / o.sound_speed;
+    (resolve_method(surface, k, o) == AcousticOptions::Method::Bem ? by_bem : by_sources)
+        .push_back(i);
+  }
+  auto tick = [&] {
+    const std::size_t n = ++done;
+    if (progress) {
+      std::lock_guard lock(progress_mutex);
+      progress(n, nm);
+    }
+  };
+  compute_transfer_bem(surface, bank, by_bem, o, modes, coeffs, &total, tick);
   std::exception_ptr error;
   std::optional<SingleThreadedBlas> blas;
-  if (o.threads != 1 && nm > 1) blas.emplace();
-  parallel_for(nm, o.threads, [&](std::size_t b, std::size_t e) {
+  if (o.threads != 1 && by_sources.size() > 1) blas.emplace();
+  parallel_for(by_sources.size(), o.threads, [&](std::size_t b, std::size_t e) {
     TransferTimes mine;
     try {
-      for (std::size_t i = b; i < e; ++i) {
+      for (std::size_t s = b; s < e; ++s) {
+        const std::size_t i = by_sources[s];
         const double wd2 = bank.omega[i] * bank.omega[i] - bank.decay[i] * bank.decay[i];
         const double omega = std::sqrt(std::max(wd2, 0.0));  // radiates at the damped frequency
         const NormalVelocity un = surface.from_mode_shape(bank.shapes.data() + i * nv * 3, omega);
         const SourceFit fit = fit_sources(surface, omega / o.sound_speed, un, o, shared, &mine);
         modes[i] = expand_sources(surface, fit, o, shared, coeffs[i], &mine);
-        const std::size_t n = ++done;
-        if (progress) {
-          std::lock_guard lock(progress_mutex);
-          progress(n, nm);
-        }
+        tick();
       }
     } catch (...) {
       std::lock_guard lock(progress_mutex);

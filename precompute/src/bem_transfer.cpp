@@ -1,8 +1,10 @@
 // Acoustic transfer by boundary elements: per mode the Burton-Miller solve on the surface, the
 // multipole coefficients by quadrature, the expansion's truncation check and an interior
 // null-field check of the surface solution.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
@@ -36,10 +38,14 @@ double null_field_error(const BemMesh& mesh, double k, const std::vector<cd>& p,
 
 }  // namespace
 
-AcousticOptions::Method resolve_method(const RadiatingSurface& surface, const AcousticOptions& o) {
-  if (o.method != AcousticOptions::Method::Auto) return o.method;
-  return surface.mesh().triangles.size() <= o.bem_auto_elements ? AcousticOptions::Method::Bem
-                                                                : AcousticOptions::Method::Sources;
+AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,
+                                       const AcousticOptions& o) {
+  using M = AcousticOptions::Method;
+  if (o.method != M::Auto) return o.method;
+  const bool fits = surface.mesh().triangles.size() <= o.bem_auto_elements;
+  const bool resolves =
+      surface.mean_element_size() * k <= 2 * std::numbers::pi / o.bem_elements_per_wavelength;
+  return fits && resolves ? M::Bem : M::Sources;
 }
 
 ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, BemSolver& solver,
@@ -103,28 +109,21 @@ ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, 
   return mt;
 }
 
-Transfer compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
-                              const AcousticOptions& o, TransferTimes* times,
-                              const std::function<void(std::size_t, std::size_t)>& progress) {
-  const std::size_t nm = bank.mode_count(), nv = bank.vertices.size();
-  Transfer out;
-  out.centre = surface.centre();
-  out.radius = surface.radius();
-  out.sound_speed = o.sound_speed;
-  out.air_density = o.air_density;
+void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
+                          const std::vector<std::size_t>& which, const AcousticOptions& o,
+                          std::vector<ModeTransfer>& modes, std::vector<std::vector<cd>>& coeffs,
+                          TransferTimes* times, const std::function<void()>& done) {
+  if (which.empty()) return;
+  const std::size_t nv = bank.vertices.size();
   const BemMesh mesh(surface.mesh());
   BemSolver solver(mesh, o.bem);
-  std::vector<cd> a;
-  for (std::size_t i = 0; i < nm; ++i) {  // ascending frequency (MODE is sorted)
+  for (std::size_t i : which) {
     const double wd2 = bank.omega[i] * bank.omega[i] - bank.decay[i] * bank.decay[i];
     const double omega = std::sqrt(std::max(wd2, 0.0));  // radiates at the damped frequency
     const NormalVelocity un = surface.from_mode_shape(bank.shapes.data() + i * nv * 3, omega);
-    const ModeTransfer mt =
-        bem_transfer(surface, mesh, solver, omega / o.sound_speed, un, o, a, times);
-    out.add_mode(mt, a);
-    if (progress) progress(i + 1, nm);
+    modes[i] = bem_transfer(surface, mesh, solver, omega / o.sound_speed, un, o, coeffs[i], times);
+    if (done) done();
   }
-  return out;
 }
 
 }  // namespace chladni::precompute

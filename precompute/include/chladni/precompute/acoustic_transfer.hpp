@@ -21,12 +21,13 @@ namespace chladni::precompute {
 
 struct AcousticOptions {
   /// bem: Burton-Miller boundary elements on the surface (docs/transfer.md); sources: the
-  /// equivalent-source fit; auto: BEM up to bem_auto_elements surface triangles, else sources.
+  /// equivalent-source fit; auto: per mode, BEM where the surface resolves the wavelength
+  /// (bem_elements_per_wavelength) and has at most bem_auto_elements triangles, else sources.
   enum class Method { Auto, Bem, Sources };
   Method method = Method::Auto;
-  /// The dense BEM system costs 16 N^2 bytes and an O(N^2) assembly per mode: above this many
-  /// triangles auto takes the equivalent-source fit (docs/transfer.md, PERFORMANCE.md).
-  std::size_t bem_auto_elements = 2500;
+  /// The dense BEM system costs 16 N^2 bytes (1 GB at 8000) and an LU of 8/3 N^3 flops.
+  std::size_t bem_auto_elements = 8000;
+  double bem_elements_per_wavelength = 6.0;
   BemOptions bem;
   double sound_speed = 343.0;  ///< m/s
   double air_density = 1.204;  ///< kg/m^3 (air at 20 C)
@@ -63,6 +64,8 @@ class RadiatingSurface {
   const SurfaceMesh& mesh() const { return mesh_; }
   const Vec3& centre() const { return centre_; }
   double radius() const { return radius_; }
+  /// Mean longest edge of the triangles (m).
+  double mean_element_size() const { return mean_size_; }
   double area() const { return area_; }
   const Vec3& face_normal(uint32_t t) const { return face_normal_[t]; }
   const std::vector<Vec3>& vertex_normals() const { return vertex_normal_; }
@@ -79,7 +82,7 @@ class RadiatingSurface {
   friend struct SourceFitter;
   SurfaceMesh mesh_;
   Vec3 centre_{0, 0, 0};
-  double radius_ = 0, area_ = 0;
+  double radius_ = 0, area_ = 0, mean_size_ = 0;
   std::vector<Vec3> face_normal_, vertex_normal_, centroid_;
   std::vector<double> face_area_;
   std::vector<uint32_t> anchors_;     // vertices in farthest-point order
@@ -148,15 +151,17 @@ ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, 
                           std::vector<std::complex<double>>* pressure = nullptr,
                           std::vector<std::complex<double>>* dpdn = nullptr);
 
-/// The method compute_transfer uses for this surface under these options.
-AcousticOptions::Method resolve_method(const RadiatingSurface& surface,
+/// The method compute_transfer uses for a mode of wavenumber k on this surface (Bem or Sources).
+AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,
                                        const AcousticOptions& options);
 
-/// compute_transfer's BEM path: one system per mode on the bank's surface, modes in ascending
-/// frequency so each GMRES solve is preconditioned by the LU of a nearby frequency.
-Transfer compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
-                              const AcousticOptions& options, TransferTimes* times = nullptr,
-                              const std::function<void(std::size_t, std::size_t)>& progress = {});
+/// compute_transfer's BEM path for the listed modes (ascending frequency, so each GMRES solve is
+/// preconditioned by the LU of a nearby frequency); fills modes[i] and coeffs[i] of each.
+void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
+                          const std::vector<std::size_t>& which, const AcousticOptions& options,
+                          std::vector<ModeTransfer>& modes,
+                          std::vector<std::vector<std::complex<double>>>& coeffs,
+                          TransferTimes* times, const std::function<void()>& done);
 
 /// Transfer of every mode of a bank whose surface is `surface` (the bank's SURF). `progress`
 /// gets (modes done, modes total).

@@ -45,7 +45,7 @@ struct BemOptions {
   std::size_t direct_limit = 1200;  ///< dense LU per solve up to this many elements; GMRES above
   double gmres_tolerance = 1e-6;    ///< relative residual
   int gmres_restart = 80;
-  int gmres_max_iterations = 600;
+  int gmres_max_iterations = 60;  ///< then factorize at this frequency (an LU ~ 70 iterations)
   /// GMRES preconditioned by the LU of a nearby frequency; refactorize at the current frequency
   /// when a solve took more iterations than this.
   int refactor_iterations = 25;
