@@ -144,6 +144,7 @@ void BemOptions::validate() const {
   if (max_depth < 0 || max_depth > 16) bad("max depth must lie in [0, 16]");
   if (!(gmres_tolerance > 0 && gmres_tolerance < 1)) bad("GMRES tolerance must lie in (0, 1)");
   if (gmres_restart < 2 || gmres_max_iterations < 1) bad("GMRES restart >= 2, iterations >= 1");
+  if (!(refactor_phase >= 0) || !std::isfinite(refactor_phase)) bad("refactor phase must be >= 0");
 }
 
 ElementIntegrals element_integrals(const BemMesh& m, uint32_t j, const Vec3& x, const Vec3& nx,

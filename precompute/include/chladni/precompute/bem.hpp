@@ -46,9 +46,9 @@ struct BemOptions {
   double gmres_tolerance = 1e-6;    ///< relative residual
   int gmres_restart = 80;
   int gmres_max_iterations = 60;  ///< then factorize at this frequency (an LU ~ 70 iterations)
-  /// GMRES preconditioned by the LU of a nearby frequency; refactorize at the current frequency
-  /// when a solve took more iterations than this.
-  int refactor_iterations = 25;
+  /// Above direct_limit: GMRES preconditioned by the single-precision LU of the last factorized
+  /// frequency k0 while |k - k0| x (bounding-box diagonal) stays below this; else a new LU.
+  double refactor_phase = 0.25;
   int threads = 0;  ///< 0: all cores
   void validate() const;
 };
@@ -89,13 +89,14 @@ class BemSolver {
   const BemMesh& mesh() const { return mesh_; }
 
   struct NearCache;  ///< frequency-independent static near-field integrals
+  struct Lu;         ///< LAPACK LU factors of one frequency's matrix
 
  private:
-  struct Lu;
   const BemMesh& mesh_;
   BemOptions options_;
   Lu* lu_ = nullptr;
   std::unique_ptr<NearCache> near_;
+  double extent_ = 0;
   Times times_;
 };
 
