@@ -5,6 +5,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <vector>
 
 #include "chladni/core/vec3.hpp"
 
@@ -94,5 +95,16 @@ inline Vec3 barycentric(const Vec3& a, const Vec3& b, const Vec3& c,
   return {l[0] * a[0] + l[1] * b[0] + l[2] * c[0], l[0] * a[1] + l[1] * b[1] + l[2] * c[1],
           l[0] * a[2] + l[1] * b[2] + l[2] * c[2]};
 }
+
+/// Element centroids, normals and area / (4 pi) as separate arrays, for far_row.
+struct FarGeometry {
+  std::vector<double> cx, cy, cz, nx, ny, nz, w;
+};
+
+/// Row i of the Burton-Miller system by the centroid rule for every element (coupling a = i al):
+/// the matrix entry -K - a D in (rre, rim) and the weight of dp/dn in the right-hand side,
+/// S + a K', in (tre, tim). The caller overwrites the near and self entries.
+void far_row(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k, double al, double* rre,
+             double* rim, double* tre, double* tim);
 
 }  // namespace chladni::precompute::bem_detail

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "bem_kernels.hpp"
@@ -47,9 +48,16 @@ struct BemSolver::NearCache {
   };
   std::vector<std::vector<Entry>> rows;
   std::vector<double> static_sum;
+  FarGeometry far;
 
   NearCache(const BemMesh& m, const BemOptions& o) : rows(m.elements()), static_sum(m.elements()) {
     const std::size_t n = m.elements();
+    for (std::size_t j = 0; j < n; ++j) {
+      far.cx.push_back(m.centroid[j][0]), far.cy.push_back(m.centroid[j][1]);
+      far.cz.push_back(m.centroid[j][2]), far.nx.push_back(m.normal[j][0]);
+      far.ny.push_back(m.normal[j][1]), far.nz.push_back(m.normal[j][2]);
+      far.w.push_back(m.area[j] / (4 * std::numbers::pi));
+    }
     parallel_for(n, o.threads, [&](std::size_t r0, std::size_t r1) {
       for (std::size_t i = r0; i < r1; ++i) {
         const Vec3 &x = m.centroid[i], &nx = m.normal[i];
@@ -77,8 +85,9 @@ struct BemSolver::NearCache {
 
 namespace {
 
-// Row-major A (A[i * n + j]: collocation point i, element j) and b = B q, in one pass. Far
-// elements: the full kernels at the centroid; near ones: the cached static integrals plus the
+// Row-major A (A[i * n + j]: collocation point i, element j) and b = B q, in one pass. All
+// elements first by the centroid rule (far_row), then near ones replaced by the cached static
+// integrals plus the
 // dynamic remainders (smooth, O(k^2 R^2) against the static parts) by 3 points within
 // near_ratio sizes, else 1.
 void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std::span<const cd> q,
@@ -92,38 +101,40 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std
   // combination second order (on a sphere at ka = 0.1: 21 % error with i/k, 0.3 % with i h).
   const cd alpha(0.0, std::min(1.0 / k, o.coupling_scale * m.mean_size()));
   parallel_for(n, o.threads, [&](std::size_t r0, std::size_t r1) {
+    std::vector<double> rre(n), rim(n), tre(n), tim(n);
     for (std::size_t i = r0; i < r1; ++i) {
       const Vec3 &x = m.centroid[i], &nx = m.normal[i];
+      far_row(cache.far, x, nx, k, alpha.imag(), rre.data(), rim.data(), tre.data(), tim.data());
+      auto store = [&](std::size_t j, const cd* acc) {
+        const cd entry = -acc[1] - alpha * acc[3], weight = acc[0] + alpha * acc[2];
+        rre[j] = entry.real(), rim[j] = entry.imag(), tre[j] = weight.real(),
+        tim[j] = weight.imag();
+      };
+      for (const auto& e : cache.rows[i]) {
+        cd acc[5] = {e.single, e.dbl, e.adjoint, e.hyper, 0.0};
+        const double d = norm(sub(x, m.centroid[e.j]));
+        const auto& t = m.triangles[e.j];
+        const Rule& r = rule(d < o.near_ratio * m.size[e.j] ? 3 : 1);
+        for (int p = 0; p < r.n; ++p)
+          add_dynamic(x, nx,
+                      barycentric(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.b[p]),
+                      m.normal[e.j], k, r.w[p] * m.area[e.j], acc);
+        store(e.j, acc);
+      }
+      // Singularity subtraction: the static hypersingular operator maps a constant density to 0
+      // on a closed surface (the Laplace double layer of a constant is piecewise constant), so its
+      // diagonal is minus the sum of the row's other static entries. This removes the O(h) error
+      // flat elements make on curved surfaces; only the weakly singular dynamic part of the self
+      // term comes from the closed form.
+      const ElementIntegrals self = element_integrals(m, uint32_t(i), x, nx, k, o);
+      const cd acc[5] = {self.single, 0.0, 0.0,
+                         self.hyper - self.hyper_static - cache.static_sum[i], 0.0};
+      store(i, acc);
       cd* row = A.data() + i * n;
       cd bi = -0.5 * alpha * q[i];
-      const auto& near = cache.rows[i];
-      std::size_t next = 0;
       for (std::size_t j = 0; j < n; ++j) {
-        cd acc[5] = {0, 0, 0, 0, 0};
-        if (next < near.size() && near[next].j == j) {
-          const auto& e = near[next++];
-          acc[0] = e.single, acc[1] = e.dbl, acc[2] = e.adjoint, acc[3] = e.hyper;
-          const double d = norm(sub(x, m.centroid[j]));
-          const auto& t = m.triangles[j];
-          const Rule& r = rule(d < o.near_ratio * m.size[j] ? 3 : 1);
-          for (int p = 0; p < r.n; ++p)
-            add_dynamic(x, nx,
-                        barycentric(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.b[p]),
-                        m.normal[j], k, r.w[p] * m.area[j], acc);
-        } else if (j == i) {
-          // Singularity subtraction: the static hypersingular operator maps a constant density
-          // to 0 on a closed surface (the Laplace double layer of a constant is piecewise
-          // constant), so its diagonal is minus the sum of the row's other static entries. This
-          // removes the O(h) error flat elements make on curved surfaces; only the weakly
-          // singular dynamic part of the self term comes from the closed form.
-          const ElementIntegrals e = element_integrals(m, uint32_t(i), x, nx, k, o);
-          acc[0] = e.single;
-          acc[3] = e.hyper - e.hyper_static - cache.static_sum[i];
-        } else {
-          add_kernels<false>(x, nx, m.centroid[j], m.normal[j], k, m.area[j], acc);
-        }
-        row[j] = -acc[1] - alpha * acc[3];
-        bi -= (acc[0] + alpha * acc[2]) * q[j];
+        row[j] = cd(rre[j], rim[j]);
+        bi -= cd(tre[j], tim[j]) * q[j];
       }
       row[i] += 0.5;
       b[i] = bi;
@@ -183,12 +194,12 @@ struct BemSolver::Lu {
     if (single) {
       std::vector<std::complex<float>> y(x, x + n);
       y.resize(std::size_t(n) + kPad);
-      cgetrs_(&trans, &n, &one, reinterpret_cast<const float*>(factors32.data()), &n,
-              pivots.data(), reinterpret_cast<float*>(y.data()), &n, &info);
+      cgetrs_(&trans, &n, &one, reinterpret_cast<const float*>(factors32.data()), &n, pivots.data(),
+              reinterpret_cast<float*>(y.data()), &n, &info);
       for (int i = 0; i < n; ++i) x[i] = cd(y[std::size_t(i)]);
     } else {
-      zgetrs_(&trans, &n, &one, reinterpret_cast<const double*>(factors.data()), &n,
-              pivots.data(), reinterpret_cast<double*>(x), &n, &info);
+      zgetrs_(&trans, &n, &one, reinterpret_cast<const double*>(factors.data()), &n, pivots.data(),
+              reinterpret_cast<double*>(x), &n, &info);
     }
   }
 };
@@ -333,8 +344,7 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
     // worth trying: factorize here.
     if (!lu_ || std::abs(k - lu_->k) * extent_ > options_.refactor_phase) factorize(true);
     res.iterations = gmres(A, b, *lu_, options_, x);
-    if (!(residual(A, b, x, options_.threads) <= 10 * options_.gmres_tolerance) &&
-        lu_->k != k) {
+    if (!(residual(A, b, x, options_.threads) <= 10 * options_.gmres_tolerance) && lu_->k != k) {
       factorize(true);
       std::fill(x.begin(), x.end(), cd(0.0));
       res.iterations += gmres(A, b, *lu_, options_, x);
@@ -344,8 +354,8 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   res.residual = residual(A, b, x, options_.threads);
   if (!(res.residual <= 10 * options_.gmres_tolerance))
     throw InternalError("bem: the solve did not converge (relative residual " +
-                        std::to_string(res.residual) + " after " +
-                        std::to_string(res.iterations) + " GMRES iterations)");
+                        std::to_string(res.residual) + " after " + std::to_string(res.iterations) +
+                        " GMRES iterations)");
   res.pressure.assign(x.begin(), x.begin() + long(n));
   for (const cd& z : res.pressure) {
     if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
