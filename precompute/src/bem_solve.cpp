@@ -17,6 +17,9 @@ extern "C" {
 void zgetrf_(const int* m, const int* n, double* a, const int* lda, int* ipiv, int* info);
 void zgetrs_(const char* trans, const int* n, const int* nrhs, const double* a, const int* lda,
              const int* ipiv, double* b, const int* ldb, int* info);
+void zgemv_(const char* trans, const int* m, const int* n, const double* alpha, const double* a,
+            const int* lda, const double* x, const int* incx, const double* beta, double* y,
+            const int* incy);
 void cgetrf_(const int* m, const int* n, float* a, const int* lda, int* ipiv, int* info);
 void cgetrs_(const char* trans, const int* n, const int* nrhs, const float* a, const int* lda,
              const int* ipiv, float* b, const int* ldb, int* info);
@@ -42,8 +45,11 @@ constexpr std::size_t kPad = 64;
 // point), and the sum of the static hypersingular entries of its row (for the singularity
 // subtraction below).
 struct BemSolver::NearCache {
+  // Static integral minus its centroid-rule value (what far_row adds), for each kernel; `close`:
+  // within near_ratio sizes, where the dynamic remainder needs 3 points as well.
   struct Entry {
     uint32_t j;
+    bool close;
     double single, dbl, adjoint, hyper;
   };
   std::vector<std::vector<Entry>> rows;
@@ -72,8 +78,12 @@ struct BemSolver::NearCache {
             sum += acc[4].real();
           } else {
             const ElementIntegrals e = element_integrals(m, uint32_t(j), x, nx, 0.0, o);
-            rows[i].push_back(
-                {uint32_t(j), e.single.real(), e.dbl.real(), e.adjoint.real(), e.hyper_static});
+            cd one[5] = {0, 0, 0, 0, 0};
+            add_kernels(x, nx, m.centroid[j], m.normal[j], 0.0, m.area[j], one);
+            const double near = o.near_ratio * m.size[j];
+            rows[i].push_back({uint32_t(j), d2 < near * near, e.single.real() - one[0].real(),
+                               e.dbl.real() - one[1].real(), e.adjoint.real() - one[2].real(),
+                               e.hyper_static - one[3].real()});
             sum += e.hyper_static;
           }
         }
@@ -93,7 +103,9 @@ namespace {
 void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std::span<const cd> q,
               const BemOptions& o, std::vector<cd>& A, std::vector<cd>& b) {
   const std::size_t n = m.elements();
-  A.assign(n * n + kPad, cd(0.0));
+  // Every entry is written below: reuse the buffer rather than zero-filling (and page-faulting)
+  // hundreds of megabytes per frequency.
+  if (A.size() != n * n + kPad) A.assign(n * n + kPad, cd(0.0));
   b.assign(n, cd(0.0));
   // Burton-Miller coupling i/k, but no larger than i h (h: the mean element size). Any coupling
   // with a positive imaginary part makes the solution unique; the hypersingular equation's
@@ -111,15 +123,21 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std
         tim[j] = weight.imag();
       };
       for (const auto& e : cache.rows[i]) {
+        // far_row gave static + dynamic by the centroid rule: add the static correction, and
+        // close by the 3-point dynamic remainder in place of the centroid one.
         cd acc[5] = {e.single, e.dbl, e.adjoint, e.hyper, 0.0};
-        const double d = norm(sub(x, m.centroid[e.j]));
-        const auto& t = m.triangles[e.j];
-        const Rule& r = rule(d < o.near_ratio * m.size[e.j] ? 3 : 1);
-        for (int p = 0; p < r.n; ++p)
-          add_dynamic(x, nx,
-                      barycentric(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.b[p]),
-                      m.normal[e.j], k, r.w[p] * m.area[e.j], acc);
-        store(e.j, acc);
+        if (e.close) {
+          const auto& t = m.triangles[e.j];
+          const Rule& r = rule(3);
+          for (int p = 0; p < r.n; ++p)
+            add_dynamic(x, nx,
+                        barycentric(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.b[p]),
+                        m.normal[e.j], k, r.w[p] * m.area[e.j], acc);
+          add_dynamic(x, nx, m.centroid[e.j], m.normal[e.j], k, -m.area[e.j], acc);
+        }
+        const cd entry = -acc[1] - alpha * acc[3], weight = acc[0] + alpha * acc[2];
+        rre[e.j] += entry.real(), rim[e.j] += entry.imag();
+        tre[e.j] += weight.real(), tim[e.j] += weight.imag();
       }
       // Singularity subtraction: the static hypersingular operator maps a constant density to 0
       // on a closed surface (the Laplace double layer of a constant is piecewise constant), so its
@@ -142,14 +160,17 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std
   });
 }
 
-void matvec(const std::vector<cd>& A, std::size_t n, const cd* x, cd* y, int threads) {
-  const Eigen::Map<const Eigen::VectorXcd> xv(x, Eigen::Index(n));
-  parallel_for(n, threads, [&](std::size_t r0, std::size_t r1) {
-    for (std::size_t i = r0; i < r1; ++i) {
-      const Eigen::Map<const Eigen::RowVectorXcd> row(A.data() + i * n, Eigen::Index(n));
-      y[i] = row * xv;
-    }
-  });
+// y = A x by the BLAS (zgemv on A^T, column-major: the transposed kernel, memory-bound and
+// threaded). x is copied into a padded buffer for the over-reading kernels noted above.
+void matvec(const std::vector<cd>& A, std::size_t n, const cd* x, cd* y, int /*threads*/) {
+  std::vector<cd> xp(x, x + n);
+  xp.resize(n + kPad);
+  const char trans = 'T';
+  const int nn = int(n), one = 1;
+  const cd alpha = 1.0, beta = 0.0;
+  zgemv_(&trans, &nn, &nn, reinterpret_cast<const double*>(&alpha),
+         reinterpret_cast<const double*>(A.data()), &nn, reinterpret_cast<const double*>(xp.data()),
+         &one, reinterpret_cast<const double*>(&beta), reinterpret_cast<double*>(y), &one);
 }
 
 double norm2(const std::vector<cd>& v) {
@@ -308,7 +329,7 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   if (q.size() != n) throw InternalError("bem: one normal derivative per element expected");
   auto t0 = std::chrono::steady_clock::now();
   if (!near_) near_ = std::make_unique<NearCache>(mesh_, options_);
-  std::vector<cd> A, b;
+  std::vector<cd>&A = matrix_, b;
   assemble(mesh_, *near_, k, q, options_, A, b);
   times_.assembly += seconds_since(t0);
 
@@ -339,13 +360,17 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
     lu_->solve(x.data());
     x.resize(n);
   } else {
-    // Factors of a frequency within 0.25 / extent precondition GMRES in a few iterations (the
-    // phase of e^(ikR) across the object moves by less than 0.25 rad); farther ones are not
-    // worth trying: factorize here.
+    // Factors of a frequency within 1 / extent precondition GMRES in under ~40 iterations (the
+    // phase of e^(ikR) across the object moves by less than 1 rad; on the bowl at 3 kHz, 21
+    // iterations at 0.7 rad, 39 at 1.4, no convergence in 60 at 2.1); farther ones are not worth
+    // trying: factorize here.
     if (!lu_ || std::abs(k - lu_->k) * extent_ > options_.refactor_phase) factorize(true);
+    t0 = std::chrono::steady_clock::now();
     res.iterations = gmres(A, b, *lu_, options_, x);
     if (!(residual(A, b, x, options_.threads) <= 10 * options_.gmres_tolerance) && lu_->k != k) {
+      times_.iteration += seconds_since(t0);
       factorize(true);
+      t0 = std::chrono::steady_clock::now();
       std::fill(x.begin(), x.end(), cd(0.0));
       res.iterations += gmres(A, b, *lu_, options_, x);
     }

@@ -45,10 +45,10 @@ struct BemOptions {
   std::size_t direct_limit = 1200;  ///< dense LU per solve up to this many elements; GMRES above
   double gmres_tolerance = 1e-6;    ///< relative residual
   int gmres_restart = 80;
-  int gmres_max_iterations = 60;  ///< then factorize at this frequency (an LU ~ 70 iterations)
+  int gmres_max_iterations = 50;  ///< then factorize at this frequency (an LU ~ 50 iterations)
   /// Above direct_limit: GMRES preconditioned by the single-precision LU of the last factorized
   /// frequency k0 while |k - k0| x (bounding-box diagonal) stays below this; else a new LU.
-  double refactor_phase = 0.25;
+  double refactor_phase = 1.0;
   int threads = 0;  ///< 0: all cores
   void validate() const;
 };
@@ -96,6 +96,7 @@ class BemSolver {
   BemOptions options_;
   Lu* lu_ = nullptr;
   std::unique_ptr<NearCache> near_;
+  std::vector<cd> matrix_;  // the current frequency's system, kept to reuse its memory
   double extent_ = 0;
   Times times_;
 };
