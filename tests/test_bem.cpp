@@ -282,3 +282,37 @@ TEST(BemSharpEdges, ThinBarMatchesTheFieldOfInteriorSources) {
 
 }  // namespace
 }  // namespace chladni
+
+namespace chladni {
+namespace {
+
+TEST(BemReciprocity, HoldsOnANonSymmetricBody) {
+  // Two radiating solutions of the same exterior problem satisfy int (p_A q_B - p_B q_A) = 0.
+  // A lumpy, off-centre body (an icosphere pushed out by a smooth non-symmetric field).
+  test::SurfaceMesh s = test::icosphere(0.1, 3);
+  for (Vec3& v : s.vertices) {
+    const double bump =
+        1 + 0.25 * std::sin(14 * v[0] + 3) * std::cos(9 * v[1] - 1) + 0.15 * v[2] / 0.1;
+    v = add(scale(v, bump), {0.02, -0.01, 0.03});
+  }
+  const BemMesh m(s);
+  const double k = 2 * kPi * 1500 / 343.0;
+  std::vector<cd> qa(m.elements()), qb(m.elements());
+  for (std::size_t j = 0; j < qa.size(); ++j) {
+    const Vec3& c = m.centroid[j];
+    qa[j] = cd(1.0 + 40 * c[0], 0.3);
+    qb[j] = cd(std::cos(30 * c[1] + 20 * c[2]), -0.5 * c[0] / 0.1);
+  }
+  precompute::BemSolver solver(m, BemOptions{});
+  const auto pa = solver.solve(k, qa).pressure, pb = solver.solve(k, qb).pressure;
+  cd cross = 0;
+  double scale_sum = 0;
+  for (std::size_t j = 0; j < qa.size(); ++j) {
+    cross += m.area[j] * (pa[j] * qb[j] - pb[j] * qa[j]);
+    scale_sum += m.area[j] * std::abs(pa[j] * qb[j]);
+  }
+  EXPECT_LT(std::abs(cross), 0.01 * scale_sum);
+}
+
+}  // namespace
+}  // namespace chladni
