@@ -3,7 +3,8 @@
 // limit, single precision above) and GMRES, for a few frequencies a small step apart; plus the
 // multipole quadrature. Surfaces: icospheres of radius 0.1 m (level L: 20 x 4^L triangles) or
 // mesh files.
-// Usage: chladni_bem_bench [SURFACE ...] [--freq HZ] [--steps N] [--json OUT]
+// Usage: chladni_bem_bench [SURFACE ...] [--freq HZ] [--steps N] [--backend cpu|gpu] [--json OUT]
+//        (gpu: the centroid-rule rows on the Vulkan device, kernels/bem_far.comp)
 //        SURFACE: icosphere:L or a mesh file (default icosphere:3 icosphere:4 meshes/bowl.obj)
 #include <chrono>
 #include <cstdio>
@@ -15,6 +16,7 @@
 
 #include "../tests/fem_fixtures.hpp"
 #include "chladni/core/spherical.hpp"
+#include "chladni/gpu/context.hpp"
 #include "chladni/precompute/bem.hpp"
 
 using namespace chladni;
@@ -33,12 +35,14 @@ int main(int argc, char** argv) {
   std::vector<std::string> surfaces;
   double freq = 2000;
   int steps = 3;
-  std::string json_path;
+  std::string json_path, backend = "cpu";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--freq") && i + 1 < argc)
       freq = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--steps") && i + 1 < argc)
       steps = std::stoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc)
+      backend = argv[++i];
     else if (!std::strcmp(argv[i], "--json") && i + 1 < argc)
       json_path = argv[++i];
     else
@@ -50,7 +54,8 @@ int main(int argc, char** argv) {
               "LU(s)", "GMRES(s)", "iters", "multipole(s)");
   for (const std::string& name : surfaces) {
     const precompute::BemMesh mesh(load(name));
-    const precompute::BemOptions o;
+    precompute::BemOptions o;
+    if (backend == "gpu") o.gpu = std::make_shared<gpu::Context>();
     precompute::BemSolver solver(mesh, o);
     std::vector<cd> q(mesh.elements());
     for (std::size_t j = 0; j < q.size(); ++j) q[j] = mesh.normal[j][2];  // a rigid shake in z
@@ -72,6 +77,7 @@ int main(int argc, char** argv) {
                 mesh.elements(), cache, per, t.factorization, t.iteration / steps,
                 double(iterations) / steps, multipole / steps);
     out.push_back({{"surface", name},
+                   {"backend", backend == "gpu" ? o.gpu->info().name : std::string("cpu")},
                    {"elements", mesh.elements()},
                    {"frequency_hz", freq},
                    {"near_cache_s", cache},

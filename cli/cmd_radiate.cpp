@@ -159,6 +159,7 @@ void run_radiate(const RadiateArgs& a) {
   ModeTransfer mt;
   if (bem) {
     bem_mesh = std::make_unique<precompute::BemMesh>(mesh);
+    o.bem.gpu = ctx;
     precompute::BemSolver solver(*bem_mesh, o.bem);
     mt = precompute::bem_transfer(surf, *bem_mesh, solver, k, un_of, o, a_lm, nullptr, &surface_p,
                                   &surface_q);
@@ -184,7 +185,7 @@ void run_radiate(const RadiateArgs& a) {
   j["frequency_hz"] = a.freq;
   j["wavenumber"] = k;
   j["method"] = to_string(mt.method);
-  j["kernels"] = bem ? std::string("cpu (double)") : kernels->name();
+  j["kernels"] = kernels->name();
   j["via"] = a.via == "multipole" ? "multipole" : bem ? "surface" : "sources";
   j["fit"] = {{"method", to_string(mt.method)},
               {bem ? "elements" : "sources", mt.sources},

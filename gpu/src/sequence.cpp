@@ -40,14 +40,14 @@ void Sequence::begin() {
 }
 
 void Sequence::dispatch(const Pipeline& p, uint32_t groups_x, const void* push,
-                        uint32_t push_bytes) {
+                        uint32_t push_bytes, uint32_t groups_y) {
   vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
   VkDescriptorSet set = p.descriptor_set();
   vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout(), 0, 1, &set, 0, nullptr);
   if (push_bytes) {
     vkCmdPushConstants(cmd_, p.layout(), VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
   }
-  if (groups_x) vkCmdDispatch(cmd_, groups_x, 1, 1);
+  if (groups_x && groups_y) vkCmdDispatch(cmd_, groups_x, groups_y, 1);
 }
 
 void Sequence::copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes,

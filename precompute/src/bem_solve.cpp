@@ -100,8 +100,40 @@ namespace {
 // integrals plus the
 // dynamic remainders (smooth, O(k^2 R^2) against the static parts) by 3 points within
 // near_ratio sizes, else 1.
-void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std::span<const cd> q,
-              const BemOptions& o, std::vector<cd>& A, std::vector<cd>& b) {
+// Row i of A (into `row`) and b_i, given the centroid-rule entries of the row (`far`, the
+// diagonal 0) and the far part of the right-hand side sum_(j != i) (S + a K')_j q_j.
+cd finish_row(const BemMesh& m, const BemSolver::NearCache& cache, double k, cd alpha,
+              std::span<const cd> q, const BemOptions& o, std::size_t i, cd far_rhs, cd* row) {
+  const Vec3 &x = m.centroid[i], &nx = m.normal[i];
+  cd bi = -0.5 * alpha * q[i] - far_rhs;
+  for (const auto& e : cache.rows[i]) {
+    // The centroid rule gave static + dynamic: add the static correction, and close by the
+    // 3-point dynamic remainder in place of the centroid one.
+    cd acc[5] = {e.single, e.dbl, e.adjoint, e.hyper, 0.0};
+    if (e.close) {
+      const auto& t = m.triangles[e.j];
+      const Rule& r = rule(3);
+      for (int p = 0; p < r.n; ++p)
+        add_dynamic(x, nx,
+                    barycentric(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.b[p]),
+                    m.normal[e.j], k, r.w[p] * m.area[e.j], acc);
+      add_dynamic(x, nx, m.centroid[e.j], m.normal[e.j], k, -m.area[e.j], acc);
+    }
+    row[e.j] += -acc[1] - alpha * acc[3];
+    bi -= (acc[0] + alpha * acc[2]) * q[e.j];
+  }
+  // Singularity subtraction: the static hypersingular operator maps a constant density to 0 on a
+  // closed surface (the Laplace double layer of a constant is piecewise constant), so its
+  // diagonal is minus the sum of the row's other static entries. This removes the O(h) error
+  // flat elements make on curved surfaces; only the weakly singular dynamic part of the self term
+  // comes from the closed form.
+  const ElementIntegrals self = element_integrals(m, uint32_t(i), x, nx, k, o);
+  row[i] = 0.5 - alpha * (self.hyper - self.hyper_static - cache.static_sum[i]);
+  return bi - self.single * q[i];
+}
+
+void assemble(const BemMesh& m, const BemSolver::NearCache& cache, BemGpuRows* gpu, double k,
+              std::span<const cd> q, const BemOptions& o, std::vector<cd>& A, std::vector<cd>& b) {
   const std::size_t n = m.elements();
   // Every entry is written below: reuse the buffer rather than zero-filling (and page-faulting)
   // hundreds of megabytes per frequency.
@@ -112,50 +144,34 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, double k, std
   // discretization on flat elements is only first order in h, and weighting it by h keeps the
   // combination second order (on a sphere at ka = 0.1: 21 % error with i/k, 0.3 % with i h).
   const cd alpha(0.0, std::min(1.0 / k, o.coupling_scale * m.mean_size()));
+  if (gpu) {  // centroid-rule rows on the device, block by block; the rest on the CPU
+    std::vector<std::complex<float>> entries, rhs;
+    for (std::size_t r0 = 0; r0 < n; r0 += gpu->block_rows()) {
+      const std::size_t count = std::min(gpu->block_rows(), n - r0);
+      gpu->rows(k, alpha.imag(), q, r0, count, entries, rhs);
+      parallel_for(count, o.threads, [&](std::size_t a, std::size_t e) {
+        for (std::size_t r = a; r < e; ++r) {
+          cd* row = A.data() + (r0 + r) * n;
+          for (std::size_t j = 0; j < n; ++j) row[j] = cd(entries[r * n + j]);
+          b[r0 + r] = finish_row(m, cache, k, alpha, q, o, r0 + r, cd(rhs[r]), row);
+        }
+      });
+    }
+    return;
+  }
   parallel_for(n, o.threads, [&](std::size_t r0, std::size_t r1) {
     std::vector<double> rre(n), rim(n), tre(n), tim(n);
     for (std::size_t i = r0; i < r1; ++i) {
-      const Vec3 &x = m.centroid[i], &nx = m.normal[i];
-      far_row(cache.far, x, nx, k, alpha.imag(), rre.data(), rim.data(), tre.data(), tim.data());
-      auto store = [&](std::size_t j, const cd* acc) {
-        const cd entry = -acc[1] - alpha * acc[3], weight = acc[0] + alpha * acc[2];
-        rre[j] = entry.real(), rim[j] = entry.imag(), tre[j] = weight.real(),
-        tim[j] = weight.imag();
-      };
-      for (const auto& e : cache.rows[i]) {
-        // far_row gave static + dynamic by the centroid rule: add the static correction, and
-        // close by the 3-point dynamic remainder in place of the centroid one.
-        cd acc[5] = {e.single, e.dbl, e.adjoint, e.hyper, 0.0};
-        if (e.close) {
-          const auto& t = m.triangles[e.j];
-          const Rule& r = rule(3);
-          for (int p = 0; p < r.n; ++p)
-            add_dynamic(x, nx,
-                        barycentric(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]], r.b[p]),
-                        m.normal[e.j], k, r.w[p] * m.area[e.j], acc);
-          add_dynamic(x, nx, m.centroid[e.j], m.normal[e.j], k, -m.area[e.j], acc);
-        }
-        const cd entry = -acc[1] - alpha * acc[3], weight = acc[0] + alpha * acc[2];
-        rre[e.j] += entry.real(), rim[e.j] += entry.imag();
-        tre[e.j] += weight.real(), tim[e.j] += weight.imag();
-      }
-      // Singularity subtraction: the static hypersingular operator maps a constant density to 0
-      // on a closed surface (the Laplace double layer of a constant is piecewise constant), so its
-      // diagonal is minus the sum of the row's other static entries. This removes the O(h) error
-      // flat elements make on curved surfaces; only the weakly singular dynamic part of the self
-      // term comes from the closed form.
-      const ElementIntegrals self = element_integrals(m, uint32_t(i), x, nx, k, o);
-      const cd acc[5] = {self.single, 0.0, 0.0,
-                         self.hyper - self.hyper_static - cache.static_sum[i], 0.0};
-      store(i, acc);
+      far_row(cache.far, m.centroid[i], m.normal[i], k, alpha.imag(), rre.data(), rim.data(),
+              tre.data(), tim.data());
+      rre[i] = rim[i] = tre[i] = tim[i] = 0;  // the self term is the closed form
       cd* row = A.data() + i * n;
-      cd bi = -0.5 * alpha * q[i];
+      cd far_rhs = 0;
       for (std::size_t j = 0; j < n; ++j) {
         row[j] = cd(rre[j], rim[j]);
-        bi -= cd(tre[j], tim[j]) * q[j];
+        far_rhs += cd(tre[j], tim[j]) * q[j];
       }
-      row[i] += 0.5;
-      b[i] = bi;
+      b[i] = finish_row(m, cache, k, alpha, q, o, i, far_rhs, row);
     }
   });
 }
@@ -330,7 +346,8 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   auto t0 = std::chrono::steady_clock::now();
   if (!near_) near_ = std::make_unique<NearCache>(mesh_, options_);
   std::vector<cd>&A = matrix_, b;
-  assemble(mesh_, *near_, k, q, options_, A, b);
+  if (options_.gpu && !gpu_rows_) gpu_rows_ = std::make_unique<BemGpuRows>(options_.gpu, mesh_);
+  assemble(mesh_, *near_, gpu_rows_.get(), k, q, options_, A, b);
   times_.assembly += seconds_since(t0);
 
   Result res;

@@ -161,7 +161,9 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
     std::unique_ptr<TransferKernels> kernels =
         o.gpu ? make_gpu_transfer_kernels(o.gpu) : make_cpu_transfer_kernels(1);
     r.transfer_kernels = kernels->name();
-    bank.transfer = compute_transfer(rs, bank, o.acoustic, *kernels, &r.transfer_times,
+    AcousticOptions acoustic = o.acoustic;
+    if (!acoustic.bem.gpu) acoustic.bem.gpu = o.gpu;  // BEM rows on the same device
+    bank.transfer = compute_transfer(rs, bank, acoustic, *kernels, &r.transfer_times,
                                      [&](std::size_t done, std::size_t total) {
                                        if (p.fraction) p.fraction(double(done) / double(total));
                                      });

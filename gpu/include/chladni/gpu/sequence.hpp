@@ -22,7 +22,7 @@ class Sequence {
   /// Starts recording (waits for a previous submit first).
   void begin();
   void dispatch(const Pipeline& p, uint32_t groups_x, const void* push = nullptr,
-                uint32_t push_bytes = 0);
+                uint32_t push_bytes = 0, uint32_t groups_y = 1);
   void copy(const Buffer& src, const Buffer& dst, VkDeviceSize bytes, VkDeviceSize src_offset = 0,
             VkDeviceSize dst_offset = 0);
   void fill_zero(const Buffer& dst);

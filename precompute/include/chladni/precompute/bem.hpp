@@ -20,6 +20,10 @@
 #include "chladni/core/vec3.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 
+namespace chladni::gpu {
+class Context;
+}
+
 namespace chladni::precompute {
 
 /// A closed triangle surface as constant boundary elements.
@@ -50,6 +54,8 @@ struct BemOptions {
   /// frequency k0 while |k - k0| x (bounding-box diagonal) stays below this; else a new LU.
   double refactor_phase = 1.0;
   int threads = 0;  ///< 0: all cores
+  /// Vulkan device for the centroid-rule rows (kernels/bem_far.comp, float); null: the CPU loop.
+  std::shared_ptr<gpu::Context> gpu;
   void validate() const;
 };
 
@@ -64,6 +70,24 @@ struct ElementIntegrals {
 };
 ElementIntegrals element_integrals(const BemMesh& mesh, uint32_t j, const Vec3& x, const Vec3& nx,
                                    double k, const BemOptions& options);
+
+/// The centroid-rule part of rows of the Burton-Miller system on a Vulkan device, in float: per
+/// row the entries -K - a D of every element (0 on the diagonal) and the right-hand side's far
+/// part sum_(j != i) (S + a K')_j q_j, with a = i al. bem_far_row.cpp is its double reference.
+class BemGpuRows {
+ public:
+  BemGpuRows(std::shared_ptr<gpu::Context> ctx, const BemMesh& mesh);
+  ~BemGpuRows();
+  /// Most rows one call may ask for (the device's storage-buffer range and dispatch limits).
+  std::size_t block_rows() const;
+  void rows(double k, double al, std::span<const std::complex<double>> q, std::size_t row0,
+            std::size_t count, std::vector<std::complex<float>>& entries,
+            std::vector<std::complex<float>>& rhs);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 /// The Burton-Miller system of one mesh, solved for any wavenumber. Keeps the LU factors of the
 /// last factorized frequency to precondition GMRES at the next ones (modes come in ascending k).
@@ -96,6 +120,7 @@ class BemSolver {
   BemOptions options_;
   Lu* lu_ = nullptr;
   std::unique_ptr<NearCache> near_;
+  std::unique_ptr<BemGpuRows> gpu_rows_;
   std::vector<cd> matrix_;  // the current frequency's system, kept to reuse its memory
   double extent_ = 0;
   Times times_;
