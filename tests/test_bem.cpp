@@ -372,6 +372,7 @@ TEST(BemGpu, RowsMatchTheDoubleReferenceAndSolvesAgree) {
     for (std::size_t j = 0; j < n; ++j) num += std::norm(pg[j] - pc[j]), den += std::norm(pc[j]);
     EXPECT_LT(std::sqrt(num / den), 1e-4) << f << " Hz";
   }
+  EXPECT_EQ(ctx->validation_errors(), 0u);
 }
 
 }  // namespace
