@@ -267,8 +267,8 @@ TEST(Soundbank, CompactSourceGainHasTheQuadrupoleTerm) {
   const ModalModel m = to_modal_model(b, "p2");
   double j2[3];
   sph_bessel_j(2, k * a, j2);
-  const double want = 1.204 / (4 * std::numbers::pi) * 4 * std::numbers::pi * a * a * j2[2] *
-                      std::sqrt(1.0 / 5);
+  const double want =
+      1.204 / (4 * std::numbers::pi) * 4 * std::numbers::pi * a * a * j2[2] * std::sqrt(1.0 / 5);
   EXPECT_NEAR(m.radiation[0], want, 0.03 * want);
 }
 

@@ -39,8 +39,8 @@ void Sequence::begin() {
   recording_ = true;
 }
 
-void Sequence::dispatch(const Pipeline& p, uint32_t groups_x, const void* push,
-                        uint32_t push_bytes, uint32_t groups_y) {
+void Sequence::dispatch(const Pipeline& p, uint32_t groups_x, const void* push, uint32_t push_bytes,
+                        uint32_t groups_y) {
   vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.handle());
   VkDescriptorSet set = p.descriptor_set();
   vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout(), 0, 1, &set, 0, nullptr);
