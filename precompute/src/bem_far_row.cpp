@@ -11,12 +11,13 @@ namespace chladni::precompute::bem_detail {
 namespace {
 
 // sin and cos of x >= 0 (x < 2^31 pi/2): Cody-Waite reduction by pi/2 in two parts, Taylor
-// polynomials on [-pi/4, pi/4] to degree 15/16 (truncation < 5e-17), quadrant by select.
+// polynomials on [-pi/4, pi/4] to degree 15/16 (truncation < 5e-17), quadrant by arithmetic.
 inline void sincos_reduced(double x, double& s, double& c) {
   constexpr double two_over_pi = 0.636619772367581343076;
   constexpr double pio2_1 = 1.57079632673412561417e+00, pio2_1t = 6.07710050650619224932e-11;
   constexpr double round_magic = 6755399441055744.0;  // 1.5 x 2^52: adds and rounds to integer
-  const double q = (x * two_over_pi + round_magic) - round_magic;
+  const double shifted = x * two_over_pi + round_magic;
+  const double q = shifted - round_magic;
   const double r = (x - q * pio2_1) - q * pio2_1t;
   const double r2 = r * r;
   const double sp =
@@ -35,10 +36,15 @@ inline void sincos_reduced(double x, double& s, double& c) {
                               r2 * (-1.0 / 3628800 + r2 * (1.0 / 479001600 +
                                                            r2 * (-1.0 / 87178291200 +
                                                                  r2 * (1.0 / 20922789888000))))))));
-  const int quadrant = static_cast<int>(q) & 3;
-  const double ss = (quadrant & 1) ? cp : sp, cc = (quadrant & 1) ? sp : cp;
-  s = (quadrant & 2) ? -ss : ss;
-  c = ((quadrant + 1) & 2) ? -cc : cc;
+  // The quadrant q mod 4 by arithmetic only (floor(q/2) = round(q/2 - 1/4) and floor(q/4) =
+  // round(q/4 - 3/8) never round a tie), so every instruction set vectorizes the selection.
+  const double half = ((q * 0.5 - 0.25) + round_magic) - round_magic;
+  const double quarter = ((q * 0.25 - 0.375) + round_magic) - round_magic;
+  const double odd = q - 2.0 * half;                  // 1 in quadrants 1 and 3: swap sin and cos
+  const double high = half - 2.0 * quarter;           // 1 in quadrants 2 and 3: negate the sine
+  const double cneg = high + odd - 2.0 * high * odd;  // 1 in quadrants 1 and 2: negate the cosine
+  s = (1.0 - 2.0 * high) * (sp + odd * (cp - sp));
+  c = (1.0 - 2.0 * cneg) * (cp + odd * (sp - cp));
 }
 
 }  // namespace
@@ -59,7 +65,7 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void far_row(
   for (std::size_t j = 0; j < n; ++j) {
     const double r0 = x0 - cx[j], r1 = x1 - cy[j], r2 = x2 - cz[j];
     const double d2 = r0 * r0 + r1 * r1 + r2 * r2;
-    const double R2 = d2 > 1e-300 ? d2 : 1e-300;  // the self entry is replaced by the caller
+    const double R2 = d2 + 1e-300;  // finite at j = i, whose entry the caller replaces
     const double R = std::sqrt(R2), inv2 = 1.0 / R2, kr = k * R;
     double s, c;
     sincos_reduced(kr, s, c);
