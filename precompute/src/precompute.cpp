@@ -196,6 +196,12 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
                                                         : nlohmann::json(o.acoustic.order)},
                         {"max_sources", o.acoustic.max_sources},
                         {"poor_fits", r.poor_fits}};
+    using M = AcousticOptions::Method;
+    const M m = o.acoustic.method;
+    std::size_t bem = 0;
+    for (const ModeTransfer& t : bank.transfer->modes) bem += t.method == TransferMethod::Bem;
+    meta["transfer"]["method"] = m == M::Auto ? "auto" : m == M::Bem ? "bem" : "sources";
+    meta["transfer"]["bem_modes"] = bem;
   }
   bank.metadata_json = meta.dump();
   bank.validate();
