@@ -238,7 +238,8 @@ void add_precompute(CLI::App& app) {
   cmd->add_option(
          "--transfer-method", a->transfer_method,
          "Surface pressure per mode: bem (Burton-Miller boundary elements), sources "
-         "(equivalent-source fit) or auto (BEM up to 2500 surface triangles, else sources)")
+         "(equivalent-source fit) or auto (per mode: BEM where the surface has 6 elements per "
+         "wavelength and at most 8000 triangles, else sources)")
       ->capture_default_str();
   cmd->add_option("--transfer-backend", a->transfer_backend,
                   "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")

@@ -243,9 +243,11 @@ void add_radiate(CLI::App& app) {
   cmd->add_option("--points", a->points, "Field points, one 'x y z' per line (m)")->required();
   cmd->add_option("--backend", a->backend, "Kernels: cpu (double) or gpu (Vulkan, float)")
       ->capture_default_str();
-  cmd->add_option("--method", a->method,
-                  "Surface pressure: bem (Burton-Miller boundary elements), sources "
-                  "(equivalent-source fit) or auto (BEM up to 2500 triangles, else sources)")
+  cmd->add_option(
+         "--method", a->method,
+         "Surface pressure: bem (Burton-Miller boundary elements), sources "
+         "(equivalent-source fit) or auto (BEM where the surface has 6 elements per wavelength "
+         "and at most 8000 triangles, else sources)")
       ->capture_default_str();
   cmd->add_option("--via", a->via,
                   "Evaluate directly from the surface solution (surface; 'sources' is its old "
