@@ -330,13 +330,7 @@ TEST(BemGpu, RowsMatchTheDoubleReferenceAndSolvesAgree) {
   const std::size_t n = m.elements();
   std::vector<cd> q(n);
   for (std::size_t j = 0; j < n; ++j) q[j] = cd(m.normal[j][2], 0.3 * m.normal[j][0]);
-  precompute::bem_detail::FarGeometry g;
-  for (std::size_t j = 0; j < n; ++j) {
-    g.cx.push_back(m.centroid[j][0]), g.cy.push_back(m.centroid[j][1]);
-    g.cz.push_back(m.centroid[j][2]), g.nx.push_back(m.normal[j][0]);
-    g.ny.push_back(m.normal[j][1]), g.nz.push_back(m.normal[j][2]);
-    g.w.push_back(m.area[j] / (4 * kPi));
-  }
+  const precompute::bem_detail::FarGeometry g(m);
   precompute::BemGpuRows gpu(ctx, m);
   for (double f : {200.0, 3000.0, 12000.0}) {  // kR from 0.4 to 29
     const double k = 2 * kPi * f / 343.0, al = 0.01;

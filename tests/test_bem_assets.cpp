@@ -75,13 +75,13 @@ TEST(BemAssets, BowlLowestModesByBemAndAudibleAtTheirPredictedLevel) {
   const Vec3 listener = sub(Vec3{0, 0, 0}, object);
   const double T = 0.5;
   double measured[2];
-  for (int pair = 0; pair < 2; ++pair) {
+  for (std::size_t pair = 0; pair < 2; ++pair) {
     // The pair's two modes differ by a few hundredths of a hertz: synthesize what the transfer
     // predicts and take the same DFT of both.
     AudioBuffer expected{a.sample_rate, 1, std::vector<float>(std::size_t(T * a.sample_rate))};
     double w0 = 0;
     for (std::size_t i = 2 * pair; i < 2 * pair + 2; ++i) {
-      const double w = std::sqrt(b.omega[i] * b.omega[i] - b.decay[i] * b.decay[i]);
+      const double w = b.damped_omega(i);
       const double amp =
           std::abs(b.transfer->pressure(i, listener)) * dot(model.shape(i, v), dir) * 0.01 / w;
       for (std::size_t n = 0; n < expected.samples.size(); ++n) {

@@ -9,8 +9,7 @@
 namespace chladni {
 
 double ModalModel::damped_omega(std::size_t i) const {
-  const double w2 = omega[i] * omega[i] - decay[i] * decay[i];
-  return w2 > 0.0 ? std::sqrt(w2) : 0.0;
+  return damped_angular_frequency(omega[i], decay[i]);
 }
 
 std::size_t ModalModel::nearest_point(const Vec3& p) const {

@@ -13,6 +13,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "parallel.hpp"
+#include "timing.hpp"
 
 // OpenBLAS's thread control, when the BLAS is OpenBLAS (weak: absent with another BLAS).
 extern "C" void openblas_set_num_threads(int) __attribute__((weak));
@@ -48,10 +49,6 @@ class SingleThreadedBlas {
 };
 
 using cd = std::complex<double>;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 double dist2(const Vec3& a, const Vec3& b) {
   const Vec3 d = sub(a, b);
@@ -450,8 +447,7 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
   // Per mode: boundary elements where the surface resolves the wavelength (auto), else sources.
   std::vector<std::size_t> by_bem, by_sources;
   for (std::size_t i = 0; i < nm; ++i) {
-    const double wd2 = bank.omega[i] * bank.omega[i] - bank.decay[i] * bank.decay[i];
-    const double k = std::sqrt(std::max(wd2, 0.0)) / o.sound_speed;
+    const double k = bank.damped_omega(i) / o.sound_speed;  // radiates at the damped frequency
     (resolve_method(surface, k, o) == AcousticOptions::Method::Bem ? by_bem : by_sources)
         .push_back(i);
   }
@@ -471,8 +467,7 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
     try {
       for (std::size_t s = b; s < e; ++s) {
         const std::size_t i = by_sources[s];
-        const double wd2 = bank.omega[i] * bank.omega[i] - bank.decay[i] * bank.decay[i];
-        const double omega = std::sqrt(std::max(wd2, 0.0));  // radiates at the damped frequency
+        const double omega = bank.damped_omega(i);
         const NormalVelocity un = surface.from_mode_shape(bank.shapes.data() + i * nv * 3, omega);
         const SourceFit fit = fit_sources(surface, omega / o.sound_speed, un, o, shared, &mine);
         modes[i] = expand_sources(surface, fit, o, shared, coeffs[i], &mine);

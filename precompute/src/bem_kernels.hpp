@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "chladni/core/vec3.hpp"
+#include "chladni/precompute/bem.hpp"
 
 namespace chladni::precompute::bem_detail {
 
@@ -99,6 +100,14 @@ inline Vec3 barycentric(const Vec3& a, const Vec3& b, const Vec3& c,
 /// Element centroids, normals and area / (4 pi) as separate arrays, for far_row.
 struct FarGeometry {
   std::vector<double> cx, cy, cz, nx, ny, nz, w;
+  explicit FarGeometry(const BemMesh& m) {
+    for (std::size_t j = 0; j < m.elements(); ++j) {
+      cx.push_back(m.centroid[j][0]), cy.push_back(m.centroid[j][1]);
+      cz.push_back(m.centroid[j][2]), nx.push_back(m.normal[j][0]);
+      ny.push_back(m.normal[j][1]), nz.push_back(m.normal[j][2]);
+      w.push_back(m.area[j] / (4 * std::numbers::pi));
+    }
+  }
 };
 
 /// Row i of the Burton-Miller system by the centroid rule for every element (coupling a = i al):

@@ -12,6 +12,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/bem.hpp"
 #include "parallel.hpp"
+#include "timing.hpp"
 
 extern "C" {
 void zgetrf_(const int* m, const int* n, double* a, const int* lda, int* ipiv, int* info);
@@ -29,10 +30,6 @@ namespace chladni::precompute {
 namespace {
 
 using namespace bem_detail;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // Debian 12's OpenBLAS level-2 complex kernels read a little past their operands (OpenBLAS
 // #4013): every buffer handed to LAPACK carries this many spare entries.
@@ -56,14 +53,9 @@ struct BemSolver::NearCache {
   std::vector<double> static_sum;
   FarGeometry far;
 
-  NearCache(const BemMesh& m, const BemOptions& o) : rows(m.elements()), static_sum(m.elements()) {
+  NearCache(const BemMesh& m, const BemOptions& o)
+      : rows(m.elements()), static_sum(m.elements()), far(m) {
     const std::size_t n = m.elements();
-    for (std::size_t j = 0; j < n; ++j) {
-      far.cx.push_back(m.centroid[j][0]), far.cy.push_back(m.centroid[j][1]);
-      far.cz.push_back(m.centroid[j][2]), far.nx.push_back(m.normal[j][0]);
-      far.ny.push_back(m.normal[j][1]), far.nz.push_back(m.normal[j][2]);
-      far.w.push_back(m.area[j] / (4 * std::numbers::pi));
-    }
     parallel_for(n, o.threads, [&](std::size_t r0, std::size_t r1) {
       for (std::size_t i = r0; i < r1; ++i) {
         const Vec3 &x = m.centroid[i], &nx = m.normal[i];
@@ -95,13 +87,10 @@ struct BemSolver::NearCache {
 
 namespace {
 
-// Row-major A (A[i * n + j]: collocation point i, element j) and b = B q, in one pass. All
-// elements first by the centroid rule (far_row), then near ones replaced by the cached static
-// integrals plus the
-// dynamic remainders (smooth, O(k^2 R^2) against the static parts) by 3 points within
-// near_ratio sizes, else 1.
-// Row i of A (into `row`) and b_i, given the centroid-rule entries of the row (`far`, the
-// diagonal 0) and the far part of the right-hand side sum_(j != i) (S + a K')_j q_j.
+// Row i of A (into `row`, which holds the centroid-rule entries with a 0 diagonal) and b_i,
+// given the far part of the right-hand side sum_(j != i) (S + a K')_j q_j: the near elements get
+// their cached static corrections (and within near_ratio sizes the 3-point dynamic remainder),
+// the diagonal the closed-form self term.
 cd finish_row(const BemMesh& m, const BemSolver::NearCache& cache, double k, cd alpha,
               std::span<const cd> q, const BemOptions& o, std::size_t i, cd far_rhs, cd* row) {
   const Vec3 &x = m.centroid[i], &nx = m.normal[i];
@@ -132,6 +121,8 @@ cd finish_row(const BemMesh& m, const BemSolver::NearCache& cache, double k, cd 
   return bi - self.single * q[i];
 }
 
+// Row-major A (A[i * n + j]: collocation point i, element j) and b = B q: every row first by
+// the centroid rule (far_row, or the device's rows), then finish_row.
 void assemble(const BemMesh& m, const BemSolver::NearCache& cache, BemGpuRows* gpu, double k,
               std::span<const cd> q, const BemOptions& o, std::vector<cd>& A, std::vector<cd>& b) {
   const std::size_t n = m.elements();
@@ -178,7 +169,7 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, BemGpuRows* g
 
 // y = A x by the BLAS (zgemv on A^T, column-major: the transposed kernel, memory-bound and
 // threaded). x is copied into a padded buffer for the over-reading kernels noted above.
-void matvec(const std::vector<cd>& A, std::size_t n, const cd* x, cd* y, int /*threads*/) {
+void matvec(const std::vector<cd>& A, std::size_t n, const cd* x, cd* y) {
   std::vector<cd> xp(x, x + n);
   xp.resize(n + kPad);
   const char trans = 'T';
@@ -256,7 +247,7 @@ int gmres(const std::vector<cd>& A, const std::vector<cd>& b, const BemSolver::L
   std::vector<cd> cs(static_cast<std::size_t>(m)), sn(static_cast<std::size_t>(m));
   int total = 0;
   while (total < o.gmres_max_iterations) {
-    matvec(A, n, x.data(), r.data(), o.threads);
+    matvec(A, n, x.data(), r.data());
     for (std::size_t i = 0; i < n; ++i) r[i] = b[i] - r[i];
     const double beta = norm2(r);
     if (beta / nb <= o.gmres_tolerance) break;
@@ -267,7 +258,7 @@ int gmres(const std::vector<cd>& A, const std::vector<cd>& b, const BemSolver::L
     for (; j < m && total < o.gmres_max_iterations; ++j, ++total) {
       std::copy(V[j].begin(), V[j].begin() + long(n), w.begin());
       M.solve(w.data());
-      matvec(A, n, w.data(), V[j + 1].data(), o.threads);
+      matvec(A, n, w.data(), V[j + 1].data());
       auto& v = V[j + 1];
       for (int i = 0; i <= j; ++i) {  // modified Gram-Schmidt
         cd h = 0;
@@ -314,11 +305,10 @@ int gmres(const std::vector<cd>& A, const std::vector<cd>& b, const BemSolver::L
   return total;
 }
 
-double residual(const std::vector<cd>& A, const std::vector<cd>& b, const std::vector<cd>& x,
-                int threads) {
+double residual(const std::vector<cd>& A, const std::vector<cd>& b, const std::vector<cd>& x) {
   const std::size_t n = b.size();
   std::vector<cd> ax(n);
-  matvec(A, n, x.data(), ax.data(), threads);
+  matvec(A, n, x.data(), ax.data());
   for (std::size_t i = 0; i < n; ++i) ax[i] -= b[i];
   return norm2(ax) / norm2(b);
 }
@@ -335,9 +325,7 @@ BemSolver::BemSolver(const BemMesh& mesh, const BemOptions& options)
   extent_ = norm(sub(hi, lo));
 }
 
-BemSolver::~BemSolver() {
-  delete lu_;
-}
+BemSolver::~BemSolver() = default;
 
 BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   const std::size_t n = mesh_.elements();
@@ -358,10 +346,9 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   }
   auto factorize = [&](bool single) {
     const auto tf = std::chrono::steady_clock::now();
-    if (!lu_) lu_ = new Lu;
+    if (!lu_) lu_ = std::make_unique<Lu>();
     if (!lu_->factor(A, n, single)) {
-      delete lu_;
-      lu_ = nullptr;
+      lu_.reset();
       throw InternalError("bem: the Burton-Miller matrix is singular (degenerate surface?)");
     }
     lu_->k = k;
@@ -376,6 +363,7 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
     std::copy(b.begin(), b.end(), x.begin());
     lu_->solve(x.data());
     x.resize(n);
+    res.residual = residual(A, b, x);
   } else {
     // Factors of a frequency within 1 / extent precondition GMRES in under ~40 iterations (the
     // phase of e^(ikR) across the object moves by less than 1 rad; on the bowl at 3 kHz, 21
@@ -384,16 +372,17 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
     if (!lu_ || std::abs(k - lu_->k) * extent_ > options_.refactor_phase) factorize(true);
     t0 = std::chrono::steady_clock::now();
     res.iterations = gmres(A, b, *lu_, options_, x);
-    if (!(residual(A, b, x, options_.threads) <= 10 * options_.gmres_tolerance) && lu_->k != k) {
+    res.residual = residual(A, b, x);
+    if (!(res.residual <= 10 * options_.gmres_tolerance) && lu_->k != k) {
       times_.iteration += seconds_since(t0);
       factorize(true);
       t0 = std::chrono::steady_clock::now();
       std::fill(x.begin(), x.end(), cd(0.0));
       res.iterations += gmres(A, b, *lu_, options_, x);
+      res.residual = residual(A, b, x);
     }
     times_.iteration += seconds_since(t0);
   }
-  res.residual = residual(A, b, x, options_.threads);
   if (!(res.residual <= 10 * options_.gmres_tolerance))
     throw InternalError("bem: the solve did not converge (relative residual " +
                         std::to_string(res.residual) + " after " + std::to_string(res.iterations) +

@@ -9,15 +9,12 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
+#include "timing.hpp"
 
 namespace chladni::precompute {
 namespace {
 
 using cd = std::complex<double>;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The representation p(x) = int p dG/dn_y - q G vanishes inside the body: its size there,
 // against the size of either term, measures how consistent the surface pressure is with the data.
@@ -118,8 +115,7 @@ void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank
   const BemMesh mesh(surface.mesh());
   BemSolver solver(mesh, o.bem);
   for (std::size_t i : which) {
-    const double wd2 = bank.omega[i] * bank.omega[i] - bank.decay[i] * bank.decay[i];
-    const double omega = std::sqrt(std::max(wd2, 0.0));  // radiates at the damped frequency
+    const double omega = bank.damped_omega(i);  // radiates at the damped frequency
     const NormalVelocity un = surface.from_mode_shape(bank.shapes.data() + i * nv * 3, omega);
     modes[i] = bem_transfer(surface, mesh, solver, omega / o.sound_speed, un, o, coeffs[i], times);
     if (done) done();

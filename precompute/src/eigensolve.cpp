@@ -17,6 +17,7 @@
 #include <thread>
 
 #include "chladni/core/error.hpp"
+#include "timing.hpp"
 
 namespace chladni::precompute {
 namespace {
@@ -155,10 +156,6 @@ Eigen::MatrixXd parallel_product(const SparseMatrix& A, const Eigen::MatrixXd& X
   }
   for (auto& th : pool) th.join();
   return Y;
-}
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 // Block Lanczos with full reorthogonalization on C (symmetric, eigenvalues theta > 0), for the

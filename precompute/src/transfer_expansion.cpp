@@ -8,15 +8,12 @@
 
 #include "chladni/core/spherical.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
+#include "timing.hpp"
 
 namespace chladni::precompute {
 namespace {
 
 using cd = std::complex<double>;
-
-double seconds_since(std::chrono::steady_clock::time_point t0) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-}
 
 std::vector<Vec3> fibonacci_sphere(std::size_t n, double radius) {
   std::vector<Vec3> out(n);

@@ -3,6 +3,7 @@
 // frequency, decay rate and radiation gain, and, when the object has geometry, its mass-normalized
 // shape at surface sample points so that impacts can be placed.
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -13,6 +14,12 @@
 #include "chladni/core/vec3.hpp"
 
 namespace chladni {
+
+/// Damped angular frequency sqrt(omega^2 - d^2) of a mode (0 when overdamped).
+inline double damped_angular_frequency(double omega, double decay) {
+  const double w2 = omega * omega - decay * decay;
+  return w2 > 0.0 ? std::sqrt(w2) : 0.0;
+}
 
 struct ModalModel {
   std::string name;

@@ -31,6 +31,10 @@ struct Soundbank {
   std::optional<Transfer> transfer;  ///< XFER: acoustic transfer per mode (optional)
 
   std::size_t mode_count() const { return omega.size(); }
+  /// Damped angular frequency omega_d = sqrt(omega^2 - d^2) (0 when overdamped).
+  double damped_omega(std::size_t mode) const {
+    return damped_angular_frequency(omega[mode], decay[mode]);
+  }
   /// Throws InputError naming the first inconsistent count, bad index or non-finite value.
   void validate() const;
 };

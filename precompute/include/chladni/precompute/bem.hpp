@@ -118,7 +118,7 @@ class BemSolver {
  private:
   const BemMesh& mesh_;
   BemOptions options_;
-  Lu* lu_ = nullptr;
+  std::unique_ptr<Lu> lu_;
   std::unique_ptr<NearCache> near_;
   std::unique_ptr<BemGpuRows> gpu_rows_;
   std::vector<cd> matrix_;  // the current frequency's system, kept to reuse its memory
