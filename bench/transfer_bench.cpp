@@ -1,7 +1,7 @@
 // Acoustic-transfer speed (docs/PERFORMANCE.md, "Acoustic transfer"): the fit of the first N modes
-// of a soundbank per stage on the CPU (double) and GPU (float) kernels, and listener-gain updates
-// for a large number of modes from the resulting expansions.
-// Usage: chladni_transfer_bench BANK [--modes N] [--gain-modes M] [--solver normal|qr]
+// of a soundbank per stage on the CPU (double) and GPU (float) kernels. Listener gains:
+// gains_bench.cpp.
+// Usage: chladni_transfer_bench BANK [--modes N] [--solver normal|qr]
 //        [--backends cpu,gpu] [--json OUT]
 #include <algorithm>
 #include <chrono>
@@ -15,8 +15,6 @@
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
-#include "chladni/runtime/thread_pool.hpp"
-#include "chladni/runtime/transfer_gains.hpp"
 
 using namespace chladni;
 using clock_type = std::chrono::steady_clock;
@@ -27,17 +25,15 @@ static double since(clock_type::time_point t0) {
 
 int main(int argc, char** argv) {
   if (argc < 2) {
-    std::fprintf(stderr, "usage: %s BANK [--modes N] [--gain-modes M] [--json OUT]\n", argv[0]);
+    std::fprintf(stderr, "usage: %s BANK [--modes N] [--json OUT]\n", argv[0]);
     return 2;
   }
   std::string bank_path = argv[1], json_path;
-  std::size_t modes = 100, gain_modes = 100000;
+  std::size_t modes = 100;
   std::string solver = "normal", runs = "cpu,gpu";
   for (int i = 2; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--modes"))
       modes = std::stoul(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--gain-modes"))
-      gain_modes = std::stoul(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--json"))
       json_path = argv[i + 1];
     else if (!std::strcmp(argv[i], "--solver"))
@@ -78,7 +74,6 @@ int main(int argc, char** argv) {
     } catch (const gpu::NoDeviceError& e) {
       std::printf("no Vulkan device (%s): GPU rows skipped\n", e.what());
     }
-    Transfer kept;
     struct Run {
       const char* name;
       bool gpu;
@@ -115,80 +110,8 @@ int main(int argc, char** argv) {
           "(%s) | mean sources %.0f, %zu coefficients, %zu poor fits\n",
           key.c_str(), kernels->name().c_str(), wall, times.matrix, times.solve, times.expand,
           run.mode_threads == 1 ? "s" : "thread-s", sources / double(t.mode_count()), coeffs, poor);
-      if (!run.gpu && run.mode_threads == 0) kept = t;
     }
 
-    if (kept.mode_count() == 0) {  // no CPU row ran: fit once for the gain benchmark
-      auto kernels = precompute::make_cpu_transfer_kernels(1);
-      kept = precompute::compute_transfer(surf, bank, o, *kernels);
-    }
-    // Listener gains: the bank's expansions repeated over objects until gain_modes modes, and the
-    // same modes truncated to order 2 (9 coefficients: compact sources, or a coarse setting).
-    Transfer low = kept;
-    low.coefficients.clear();
-    for (std::size_t i = 0; i < kept.mode_count(); ++i) {
-      ModeTransfer m = kept.modes[i];
-      m.order = std::min<uint32_t>(m.order, 2);
-      m.offset = low.coefficients.size();
-      const auto* a = kept.coefficients_of(i);
-      low.coefficients.insert(low.coefficients.end(), a, a + (m.order + 1) * (m.order + 1));
-      low.modes[i] = m;
-    }
-    for (const auto& [label, source] :
-         {std::pair<const char*, const Transfer*>{"bank", &kept}, {"order2", &low}}) {
-      runtime::TransferTable table;
-      while (table.mode_count() < gain_modes) table.add(*source);
-      const std::size_t n = table.mode_count();
-      std::vector<Vec3> listener(table.objects.size());
-      runtime::ListenerFrame frame;
-      std::vector<float> out(n);
-      const double mean_coeffs = double(table.coefficients.size()) / double(n);
-      auto median_ms = [&](auto&& fn) {
-        std::vector<double> ms;
-        for (int rep = 0; rep < 30; ++rep) {
-          for (std::size_t o = 0; o < listener.size(); ++o)
-            listener[o] = {1.0 + 0.01 * rep, 0.5 * std::sin(0.1 * double(o) + rep), 0.3};
-          const auto s = clock_type::now();
-          fn();
-          ms.push_back(1e3 * since(s));
-        }
-        std::sort(ms.begin(), ms.end());
-        return ms[ms.size() / 2];
-      };
-      std::printf("listener gains (%s): %zu modes in %zu objects, %.1f coefficients per mode\n",
-                  label, n, table.objects.size(), mean_coeffs);
-      nlohmann::json& g = j["gains"][label];
-      g["modes"] = n;
-      g["objects"] = table.objects.size();
-      g["mean_coefficients"] = mean_coeffs;
-      const double frame_ms = median_ms([&] { frame.update(table, listener); });
-      std::printf("  harmonics per object (CPU)        %8.3f ms\n", frame_ms);
-      g["frame_ms"] = frame_ms;
-      for (int threads : {1, int(std::max(1u, std::thread::hardware_concurrency()))}) {
-        runtime::ThreadPool pool(threads);
-        const double ms = median_ms([&] {
-          frame.update(table, listener);
-          runtime::transfer_gains(table, frame, out, &pool);
-        });
-        std::printf("  cpu, %d thread%s                      %8.3f ms per update\n", threads,
-                    threads > 1 ? "s" : " ", ms);
-        g["cpu_" + std::to_string(threads) + "_threads_ms"] = ms;
-      }
-      if (ctx) {
-        runtime::GpuTransferGains gg(ctx, table);
-        double device = 0;
-        const double ms = median_ms([&] {
-          frame.update(table, listener);
-          gg.compute(frame, out);
-          device = gg.last_device_ms();
-        });
-        std::printf("  gpu (%s)   %8.3f ms per update (device %.3f ms)\n", ctx->info().name.c_str(),
-                    ms, device);
-        g["gpu_ms"] = ms;
-        g["gpu_device_ms"] = device;
-        g["gpu"] = ctx->info().name;
-      }
-    }
     if (!json_path.empty()) std::ofstream(json_path) << j.dump(2) << '\n';
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

@@ -47,6 +47,7 @@ void listener_gains(const ModalModel& model, runtime::ObjectModes& object, const
   std::vector<float> xfer;
   if (model.transfer) {
     runtime::TransferTable table;
+    table.map_options.reset();  // one update: the series costs less than building maps
     table.add(*model.transfer);
     runtime::ListenerFrame frame;
     const Vec3 at[1] = {listener};

@@ -338,6 +338,7 @@ TEST(TransferGains, CpuAndGpuMatchTheDoubleReference) {
   const Transfer a = random_transfer(rng, {0.1, 0.2, 0.0}, 0.12, 200);
   const Transfer b = random_transfer(rng, {-2.0, 0.5, 1.0}, 0.4, 150);
   runtime::TransferTable table;
+  table.map_options.reset();  // the series itself (gain maps: test_gain_map.cpp)
   table.add(a);
   table.add(b);
   ASSERT_EQ(table.mode_count(), 350u);
@@ -355,7 +356,7 @@ TEST(TransferGains, CpuAndGpuMatchTheDoubleReference) {
   for (const Vec3& la : {Vec3{0.12, 0.21, 0.05}, Vec3{0.1, 0.2, 0.3}, Vec3{3.0, -4.0, 1.5}}) {
     const Vec3 lb{la[1] - 2.0, -la[0] + 0.5, la[2] + 1.0};
     const std::vector<Vec3> listener{la, lb};
-    frame.update(table, listener);
+    frame.update(table, listener, true);
     runtime::transfer_gains(table, frame, cpu, &pool);
     if (gpu) {
       gpu->compute(frame, dev);
@@ -389,6 +390,7 @@ TEST(TransferGains, DistanceAndDirectionShapeTheGain) {
   t.add_mode(m, {cd(1, 0), 0, 0, 0});
   t.add_mode(m, {0, 0, cd(0, 1), 0});
   runtime::TransferTable table;
+  table.map_options.reset();
   table.add(t);
   runtime::ListenerFrame frame;
   std::vector<float> g(2);
@@ -449,13 +451,15 @@ TEST(TransferRender, ListenerAndObjectPoseShapeTheSound) {
   const runtime::ObjectModes obj = runtime::object_modes(model);
   ASSERT_NE(obj.transfer, nullptr);
 
-  auto render = [&](const Scene& scene) {
+  auto render = [&](const Scene& scene, std::size_t map_modes = 4096) {
     runtime::CpuFilterbankOptions fo;
     fo.channels = 1;
     fo.capacity = 1024;
     fo.threads = 1;
     runtime::CpuFilterbank fb(fo);
-    return runtime::render_scene(scene, {obj}, fb, {});
+    runtime::RenderOptions ro;
+    ro.map_gain_modes = map_modes;
+    return runtime::render_scene(scene, {obj}, fb, ro);
   };
   Scene s;
   s.channels = 1;
@@ -475,6 +479,15 @@ TEST(TransferRender, ListenerAndObjectPoseShapeTheSound) {
   EXPECT_NEAR(tone(side, 500, 0, half) / tone(axis, 500, 0, half), 1.0, 1e-3);
   EXPECT_LT(tone(side, 900, 0, half), 1e-3 * tone(axis, 900, 0, half));
   EXPECT_GT(tone(axis, 900, 0, half), 0.1 * tone(axis, 500, 0, half));
+  // The same through far-field maps (10 R away): the levels and the dipole's null hold.
+  s.listener.position = {0, 0, 1};
+  const AudioBuffer axis_map = render(s, 0);
+  EXPECT_NEAR(tone(axis_map, 500, 0, half) / tone(axis, 500, 0, half), 1.0, 5e-3);
+  EXPECT_NEAR(tone(axis_map, 900, 0, half) / tone(axis, 900, 0, half), 1.0, 5e-3);
+  s.listener.position = {1, 0, 0};
+  const AudioBuffer side_map = render(s, 0);
+  EXPECT_LT(tone(side_map, 900, 0, half), 1e-3 * tone(axis, 900, 0, half));
+  s.listener.position = {0, 0, 1};
 
   s.listener.position = {0, 0, 2};  // twice as far on the axis: the monopole at half the level
   const AudioBuffer far = render(s);

@@ -18,6 +18,8 @@ namespace {
 
 // Spherical spreading relative to 1 m, clamped so an object at the listener stays finite.
 constexpr double kMinDistance = 0.1;
+// Listener-gain tables this large spread their updates over all cores.
+constexpr std::size_t kThreadedGainModes = 4096;
 // Surface points each shaken object's particles move between.
 constexpr std::size_t kShakeContacts = 8;
 
@@ -171,22 +173,32 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
     position.push_back(so_k.position);
     orientation.push_back(so_k.orientation);
   }
+  // Objects that share a soundbank share its coefficients and far-field maps.
+  std::size_t transfer_modes = 0;
+  for (const ObjectModes& obj : objects)
+    if (obj.transfer) transfer_modes += obj.transfer->mode_count();
+  const bool gpu_table = options.gain_device && transfer_modes >= options.gpu_gain_modes;
+  ThreadPool pool(transfer_modes >= kThreadedGainModes
+                      ? int(std::max(1u, std::thread::hardware_concurrency()))
+                      : 1);
   TransferTable table;
+  // Maps pay for their build once many modes are updated; the device streams the series.
+  if (gpu_table || transfer_modes < options.map_gain_modes) table.map_options.reset();
   std::vector<int> table_object(objects.size(), -1);
   for (std::size_t k = 0; k < objects.size(); ++k) {
     if (!objects[k].transfer) continue;
     if (objects[k].transfer->mode_count() != objects[k].modes.size())
       throw InternalError("render: transfer and modes differ in count");
-    table_object[k] = static_cast<int>(table.add(*objects[k].transfer));
+    std::size_t same = 0;
+    while (same < k && objects[same].transfer != objects[k].transfer) ++same;
+    table_object[k] = static_cast<int>(same < k ? table.add_instance(table_object[same])
+                                                : table.add(*objects[k].transfer, &pool));
   }
   ListenerFrame frame;
   std::vector<Vec3> listener_local(table.objects.size());
   std::vector<float> table_gains(table.mode_count()), gains;
   std::unique_ptr<GpuTransferGains> gpu_gains;
-  if (options.gain_device && table.mode_count() >= options.gpu_gain_modes)
-    gpu_gains = std::make_unique<GpuTransferGains>(options.gain_device, table);
-  ThreadPool pool(
-      table.mode_count() >= 4096 ? int(std::max(1u, std::thread::hardware_concurrency())) : 1);
+  if (gpu_table) gpu_gains = std::make_unique<GpuTransferGains>(options.gain_device, table);
   RenderReport rep;
   rep.gain_backend = table.mode_count() == 0 ? "" : gpu_gains ? "gpu" : "cpu";
   auto update_gains = [&] {
@@ -197,7 +209,7 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
             rotate_inverse(orientation[k], sub(listener.position, position[k]));
     }
     if (table.mode_count() > 0) {
-      frame.update(table, listener_local);
+      frame.update(table, listener_local, gpu_gains != nullptr);
       if (gpu_gains)
         gpu_gains->compute(frame, table_gains);
       else

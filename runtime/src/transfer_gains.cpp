@@ -65,16 +65,42 @@ struct CpuTask {
   float* out;
 };
 
+void object_gains(const TransferTable& t, const ListenerFrame& f, uint32_t o, float* out) {
+  const TransferTable::Object& ob = t.objects[o];
+  const float r = f.r[o];
+  float* dst = out + ob.first_mode;
+  if (ob.map == TransferTable::kNoMap) {
+    for (uint32_t j = 0; j < ob.mode_count; ++j) {
+      const TransferTable::Mode& m = t.modes[ob.first_mode + j];
+      dst[j] = mode_gain(m, t.coefficients.data() + m.offset, f.y.data() + ob.y_offset, r,
+                         float(ob.radius));
+    }
+    return;
+  }
+  const GainMap& map = t.maps[ob.map];
+  for (const GainMap::Grid& g : map.grids) grid_gains(g, g.cell(f.dir[o]), 1.0f / r, dst);
+  if (f.series_order[o] < 0) return;
+  for (uint32_t j = 0; j < ob.mode_count; ++j) {
+    if (r >= map.valid_radius[j]) continue;
+    const TransferTable::Mode& m = t.modes[ob.first_mode + j];
+    dst[j] = mode_gain(m, t.coefficients.data() + m.offset, f.y.data() + ob.y_offset, r,
+                       float(ob.radius));
+  }
+}
+
+// Task i: the objects whose first mode lies in [i K, (i + 1) K), K = kModesPerTask.
 void cpu_task(void* ctx, int index) {
   const auto& c = *static_cast<const CpuTask*>(ctx);
-  const std::size_t b = std::size_t(index) * kModesPerTask;
-  const std::size_t e = std::min(c.table->modes.size(), b + kModesPerTask);
-  for (std::size_t i = b; i < e; ++i) {
-    const TransferTable::Mode& m = c.table->modes[i];
-    const TransferTable::Object& o = c.table->objects[m.object];
-    c.out[i] = mode_gain(m, c.table->coefficients.data() + m.offset, c.frame->y.data() + o.y_offset,
-                         c.frame->r[m.object], float(o.radius));
-  }
+  const auto& objs = c.table->objects;
+  auto first_at = [&](std::size_t mode) {
+    return std::lower_bound(
+               objs.begin(), objs.end(), mode,
+               [](const TransferTable::Object& o, std::size_t m) { return o.first_mode < m; }) -
+           objs.begin();
+  };
+  const std::size_t b = first_at(std::size_t(index) * kModesPerTask);
+  const std::size_t e = first_at(std::size_t(index + 1) * kModesPerTask);
+  for (std::size_t o = b; o < e; ++o) object_gains(*c.table, *c.frame, uint32_t(o), c.out);
 }
 
 struct GpuMode {
@@ -91,7 +117,7 @@ struct Push {
 
 }  // namespace
 
-uint32_t TransferTable::add(const Transfer& t) {
+uint32_t TransferTable::add(const Transfer& t, ThreadPool* pool) {
   t.validate();
   Object o;
   o.centre = t.centre;
@@ -111,16 +137,41 @@ uint32_t TransferTable::add(const Transfer& t) {
     coefficients.insert(coefficients.end(), a, a + n);
     o.max_order = std::max(o.max_order, mt.order);
   }
+  if (map_options && t.mode_count() > 0) {
+    maps.push_back(build_gain_map(t, *map_options, pool));
+    o.map = static_cast<uint32_t>(maps.size() - 1);
+  }
   y_count += static_cast<uint32_t>(sh_count(static_cast<int>(o.max_order)));
   objects.push_back(o);
   return index;
 }
 
-void ListenerFrame::update(const TransferTable& table, std::span<const Vec3> listener) {
+uint32_t TransferTable::add_instance(uint32_t object) {
+  if (object >= objects.size()) throw std::out_of_range("transfer table: no such object");
+  Object o = objects[object];
+  const uint32_t index = static_cast<uint32_t>(objects.size());
+  const uint32_t first = o.first_mode;
+  o.first_mode = static_cast<uint32_t>(modes.size());
+  o.y_offset = y_count;
+  for (uint32_t i = 0; i < o.mode_count; ++i) {
+    Mode m = modes[first + i];
+    m.object = index;
+    modes.push_back(m);
+  }
+  y_count += static_cast<uint32_t>(sh_count(static_cast<int>(o.max_order)));
+  objects.push_back(o);
+  return index;
+}
+
+void ListenerFrame::update(const TransferTable& table, std::span<const Vec3> listener,
+                           bool every_object) {
   if (listener.size() != table.objects.size())
     throw std::invalid_argument("listener frame: one position per object is required");
   r.resize(table.objects.size());
+  dir.resize(table.objects.size());
+  series_order.resize(table.objects.size());
   y.resize(table.y_count);
+  all_harmonics = every_object;
   uint32_t top = 0;
   for (const auto& ob : table.objects) top = std::max(top, ob.max_order);
   scratch.resize(sh_count(static_cast<int>(top)));
@@ -129,8 +180,15 @@ void ListenerFrame::update(const TransferTable& table, std::span<const Vec3> lis
     const TransferTable::Object& ob = table.objects[o];
     const Vec3 d = sub(listener[o], ob.centre);
     r[o] = static_cast<float>(std::max(std::sqrt(dot(d, d)), ob.radius));
-    real_sh(static_cast<int>(ob.max_order), d, yd);
-    for (std::size_t k = 0; k < sh_count(static_cast<int>(ob.max_order)); ++k)
+    dir[o] = map_direction(d);
+    // Harmonics only up to the highest order the series still has to serve at this distance.
+    int order = static_cast<int>(ob.max_order);
+    if (ob.map != TransferTable::kNoMap && !every_object)
+      order = table.maps[ob.map].series_order(r[o]);
+    series_order[o] = order;
+    if (order < 0) continue;
+    real_sh(order, d, yd);
+    for (std::size_t k = 0; k < sh_count(order); ++k)
       y[ob.y_offset + k] = static_cast<float>(yd[k]);
   }
 }
@@ -139,6 +197,8 @@ void transfer_gains(const TransferTable& table, const ListenerFrame& frame, std:
                     ThreadPool* pool) {
   if (out.size() < table.modes.size())
     throw std::invalid_argument("transfer gains: output too short");
+  if (frame.r.size() != table.objects.size())
+    throw std::invalid_argument("transfer gains: frame does not match the table");
   CpuTask task{&table, &frame, out.data()};
   const int tasks = static_cast<int>((table.modes.size() + kModesPerTask - 1) / kModesPerTask);
   if (pool)
@@ -175,28 +235,30 @@ GpuTransferGains::GpuTransferGains(std::shared_ptr<gpu::Context> ctx, const Tran
   for (uint32_t o = 0; o < objects_; ++o)
     objs[o] = {0.0f, float(t.objects[o].radius), t.objects[o].y_offset, 0u};
 
+  // A chunk's modes read one contiguous coefficient range; instances point back into their
+  // asset's range, so the range is the span of all offsets in the chunk.
   const uint64_t max_coeffs = range / sizeof(std::complex<float>);
+  auto end_of = [&](uint32_t i) { return t.modes[i].offset + sh_count(int(t.modes[i].order)); };
   for (uint32_t first = 0; first < modes_;) {
     Chunk c;
     c.first = first;
-    std::vector<GpuMode> modes;
-    const uint64_t base = t.modes[first].offset;
-    uint32_t i = first;
+    uint64_t lo = t.modes[first].offset, hi = end_of(first);
+    if (hi - lo > max_coeffs) throw gpu::Error("transfer gains: one mode exceeds a buffer binding");
+    uint32_t i = first + 1;
     for (; i < modes_; ++i) {
-      const uint64_t end = t.modes[i].offset + sh_count(int(t.modes[i].order));
-      if (end - base > max_coeffs && i > first) break;
-      if (end - base > max_coeffs)
-        throw gpu::Error("transfer gains: one mode exceeds a buffer binding");
-      modes.push_back(
-          {t.modes[i].k, t.modes[i].order, uint32_t(t.modes[i].offset - base), t.modes[i].object});
+      const uint64_t l2 = std::min<uint64_t>(lo, t.modes[i].offset), h2 = std::max(hi, end_of(i));
+      if (h2 - l2 > max_coeffs) break;
+      lo = l2, hi = h2;
     }
     c.count = i - first;
     if ((uint64_t(c.count) + kLocal - 1) / kLocal > ctx_->limits().maxComputeWorkGroupCount[0])
       throw gpu::Error("transfer gains: too many modes for one dispatch");
-    const uint64_t end = t.modes[i - 1].offset + sh_count(int(t.modes[i - 1].order));
+    std::vector<GpuMode> modes;
+    for (uint32_t m = first; m < i; ++m)
+      modes.push_back(
+          {t.modes[m].k, t.modes[m].order, uint32_t(t.modes[m].offset - lo), t.modes[m].object});
     c.modes = device(modes.data(), modes.size() * sizeof(GpuMode));
-    c.coefficients =
-        device(t.coefficients.data() + base, (end - base) * sizeof(std::complex<float>));
+    c.coefficients = device(t.coefficients.data() + lo, (hi - lo) * sizeof(std::complex<float>));
     c.pipeline = std::make_unique<gpu::Pipeline>(*ctx_, k_xfer_gains_spv, 5, sizeof(Push));
     c.pipeline->bind(0, *c.modes);
     c.pipeline->bind(1, *c.coefficients);
@@ -215,6 +277,8 @@ void GpuTransferGains::compute(const ListenerFrame& frame, std::span<float> out)
   if (out.size() < modes_) throw std::invalid_argument("transfer gains: output too short");
   if (frame.r.size() != objects_ || frame.y.size() != y_count_)
     throw std::invalid_argument("transfer gains: frame does not match the table");
+  if (!frame.all_harmonics)
+    throw std::invalid_argument("transfer gains: the GPU series needs every object's harmonics");
   if (modes_ == 0) return;
   auto* objs = static_cast<GpuObject*>(object_buf_->data());
   for (uint32_t o = 0; o < objects_; ++o) objs[o].r = frame.r[o];

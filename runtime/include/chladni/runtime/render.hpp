@@ -62,6 +62,9 @@ struct RenderOptions {
   /// with transfer (null: always on the CPU).
   std::shared_ptr<gpu::Context> gain_device;
   std::size_t gpu_gain_modes = 20000;
+  /// On the CPU, listener gains come from far-field maps (gain_map.hpp) when the scene has at
+  /// least this many modes with transfer: their build pays off once many modes are updated.
+  std::size_t map_gain_modes = 4096;
   uint64_t seed = 1;  ///< shake events' random streams
 };
 

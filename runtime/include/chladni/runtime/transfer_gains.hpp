@@ -4,14 +4,19 @@
 // The modes of many objects are flattened into one table (single precision); a CPU path
 // (threaded, allocation-free per update) and a Vulkan kernel (kernels/xfer_gains.comp) evaluate
 // the same series: p = sum_l [h_l(kr) / h_l(kR)] sum_m a_lm Y_lm(x^), with r clamped to >= R.
+// The CPU path reads each mode's far-field map instead (gain_map.hpp) where the listener is
+// beyond the map's valid radius: four grid nodes per mode instead of (L+1)^2 coefficients.
+// Instances of one asset share its coefficients and maps (add_instance).
 #include <complex>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "chladni/core/transfer.hpp"
 #include "chladni/core/vec3.hpp"
+#include "chladni/runtime/gain_map.hpp"
 
 namespace chladni::gpu {
 class Buffer;
@@ -37,24 +42,41 @@ struct TransferTable {
     uint32_t max_order = 0;
     uint32_t first_mode = 0, mode_count = 0;
     uint32_t y_offset = 0;  ///< first Y_lm of this object in the per-update harmonics table
+    uint32_t map = kNoMap;  ///< index in maps
   };
+  static constexpr uint32_t kNoMap = UINT32_MAX;
   std::vector<Mode> modes;
   std::vector<std::complex<float>> coefficients;
   std::vector<Object> objects;
+  std::vector<GainMap> maps;
   uint32_t y_count = 0;  ///< harmonics per update, summed over objects
 
-  /// Appends an object's modes; returns the object's index.
-  uint32_t add(const Transfer& t);
+  /// Options for the far-field maps built by add(); nullopt: the series everywhere.
+  std::optional<GainMapOptions> map_options = GainMapOptions{};
+
+  /// Appends an object's modes (and builds its maps, threaded over `pool` when given); returns
+  /// the object's index.
+  uint32_t add(const Transfer& t, ThreadPool* pool = nullptr);
+  /// Another object with the same modes as `object` (another instance of the same asset): shares
+  /// its coefficients and maps, so only the per-mode records are added.
+  uint32_t add_instance(uint32_t object);
   std::size_t mode_count() const { return modes.size(); }
 };
 
-/// Per-update scratch: each object's clamped distance and its harmonics Y_lm(listener direction).
+/// Per-update scratch: each object's clamped distance, the listener direction's cell on the
+/// object's maps, and its harmonics Y_lm(listener direction) where the series is needed.
 struct ListenerFrame {
-  std::vector<float> r;  ///< per object
-  std::vector<float> y;  ///< TransferTable::y_count
+  std::vector<float> r;           ///< per object
+  std::vector<MapDirection> dir;  ///< per object
+  std::vector<int> series_order;  ///< per object: harmonics computed up to this order (-1: none)
+  std::vector<float> y;           ///< TransferTable::y_count
+  bool all_harmonics = false;     ///< y holds every object's harmonics (as the GPU kernel needs)
   std::vector<double> scratch;
-  /// Fills r and y from the listener's position in each object's frame (no allocation once sized).
-  void update(const TransferTable& table, std::span<const Vec3> listener_in_object);
+  /// Fills the frame from the listener's position in each object's frame (no allocation once
+  /// sized). Harmonics are computed only for objects whose listener is nearer than their maps
+  /// hold, unless `all_harmonics`.
+  void update(const TransferTable& table, std::span<const Vec3> listener_in_object,
+              bool all_harmonics = false);
 };
 
 /// CPU evaluation: out[i] = |p_i| for every mode of the table. Allocation-free; spreads the modes
