@@ -22,6 +22,7 @@ struct PrecomputeArgs {
                                           mass = "consistent", json_path;
   double scale = 1, E = NAN, nu = NAN, rho = NAN, max_freq = 20000, sample_rate = 48000;
   double max_tet_volume = 0;
+  double max_memory_gb = -1;  // negative: 80 % of the memory available
   int order = 2, threads = 0;
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
   std::string eigensolver = "block", transfer_backend = "auto", transfer_method = "auto";
@@ -63,7 +64,11 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                 {"max_residual", r.max_residual},
                 {"factor_seconds", r.eigen.factor_seconds},
                 {"lanczos_seconds", r.eigen.lanczos_seconds},
-                {"solve_seconds", r.eigen.solve_seconds}};
+                {"solve_seconds", r.eigen.solve_seconds},
+                {"factor_nonzeros", r.eigen.factor_entries},
+                {"factor_bytes", r.eigen.factor_bytes},
+                {"factor_flops", r.eigen.factor_flops},
+                {"basis_bytes", r.eigen.basis_bytes}};
   j["modes"] = {{"kept", r.kept},
                 {"overdamped", r.overdamped},
                 {"below_band", r.below_band},
@@ -114,6 +119,9 @@ void run_precompute(const PrecomputeArgs& a) {
   o.max_frequency = a.max_freq;
   o.sample_rate = a.sample_rate;
   o.max_tet_volume = a.max_tet_volume;
+  if (!(a.max_memory_gb < 0 || a.max_memory_gb >= 0) || std::isinf(a.max_memory_gb))
+    throw InputError("--max-memory must be a finite number of GB (0: no limit)");
+  o.max_memory = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
   o.threads = a.threads;
   o.mode_cap = std::max(a.mode_cap, a.max_modes);
   o.transfer = !a.no_transfer;
@@ -213,6 +221,10 @@ void add_precompute(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--max-tet-volume", a->max_tet_volume,
                   "Largest tetrahedron (m^3; 0: from --max-freq)");
+  cmd->add_option("--max-memory", a->max_memory_gb,
+                  "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "
+                  "80 % of the memory available): larger problems are refused before the "
+                  "factorization, with what they would need");
   cmd->add_option("--mode-cap", a->mode_cap, "Most modes searched for below --max-freq")
       ->capture_default_str();
   cmd->add_option("--eigensolver", a->eigensolver,

@@ -115,6 +115,11 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
        {"read mesh", "check surface", "tetrahedralize", "assemble", "eigen-solve"})
     EXPECT_TRUE(j["seconds"].contains(stage)) << stage;
   EXPECT_NEAR(j["frequencies_hz"][0].get<double>(), 575.0, 6.0);
+  // The symbolic analysis reports the factor before it is computed.
+  EXPECT_GT(j["eigen"]["factor_nonzeros"].get<double>(), double(j["volume_mesh"]["dofs"]));
+  EXPECT_GT(j["eigen"]["factor_bytes"].get<double>(),
+            8 * j["eigen"]["factor_nonzeros"].get<double>() - 1);
+  EXPECT_GT(j["eigen"]["factor_flops"].get<double>(), 0.0);
 
   r = run("info " + bank + " --json");
   ASSERT_EQ(r.code, 0) << r.output;
@@ -206,6 +211,23 @@ TEST(CliPrecompute, BadArgumentsNameTheProblem) {
   r = run("materials");
   EXPECT_EQ(r.code, 0);
   EXPECT_NE(r.output.find("sl2016-porcelain:caughey"), std::string::npos);
+}
+
+// A problem larger than --max-memory is refused after the symbolic analysis, before the
+// factorization, with what it would need; an existing output is left as it was.
+TEST(CliPrecompute, MemoryBudgetRefusesBeforeTheFactorization) {
+  const std::string out = chladni::test::write_temp("chladni_budget.chbank", "keep");
+  const std::string bar = CHLADNI_SOURCE_DIR "/meshes/bar.obj";
+  Result r = run("precompute " + bar + " -o " + out +
+                 " --max-modes 6 --max-tet-volume 1e-6 --max-memory 0.001");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("more than the memory budget of 0.00 GB"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("nnz(L)"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("--max-memory"), std::string::npos) << r.output;
+  EXPECT_EQ(chladni::test::read_file(out), "keep");
+  r = run("precompute " + bar + " -o " + out + " --max-memory nan");
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("--max-memory"), std::string::npos) << r.output;
 }
 
 TEST(CliPrecompute, NoTransferLeavesXferOut) {

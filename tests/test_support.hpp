@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <memory>
 #include <span>
 
@@ -48,6 +49,11 @@ inline double max_diff(std::span<const float> a, std::span<const float> b) {
 /// A path in the system's temporary folder.
 inline std::string temp_path(const std::string& name) {
   return (std::filesystem::temp_directory_path() / name).string();
+}
+/// The whole file as a string ("" when it cannot be read).
+inline std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
 }
 /// Writes `text` to temp_path(name) and returns that path.
 inline std::string write_temp(const std::string& name, const std::string& text) {

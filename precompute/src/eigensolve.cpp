@@ -6,18 +6,28 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/QR>
 #include <Eigen/SparseCholesky>
-#ifdef CHLADNI_HAVE_CHOLMOD
-#include <Eigen/CholmodSupport>
-#endif
+
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <fstream>
 #include <numbers>
 #include <random>
 #include <thread>
 
 #include "chladni/core/error.hpp"
 #include "timing.hpp"
+#ifdef CHLADNI_HAVE_CHOLMOD
+#include "cholmod_factor.hpp"
+#else
+namespace chladni::precompute {
+struct FactorEstimate {
+  double entries = 0, bytes = 0, flops = 0;
+};
+}  // namespace chladni::precompute
+#endif
 
 namespace chladni::precompute {
 namespace {
@@ -30,39 +40,23 @@ namespace {
 #ifdef CHLADNI_HAVE_CHOLMOD
 constexpr const char* kFactorName = "CHOLMOD supernodal LLT";
 
-// Eigen's CholmodSupernodalLLT, with the half solves that Eigen does not expose.
-class Factor : public Eigen::CholmodBase<SparseMatrix, Eigen::Lower, Factor> {
+// CHOLMOD's supernodal LLT with every call checked (cholmod_factor.cpp).
+class Factor {
  public:
-  Factor() {
-    m_cholmod.final_asis = 1;
-    m_cholmod.supernodal = CHOLMOD_SUPERNODAL;
-    m_cholmod.print = 0;  // failures are reported through our exceptions
-  }
-  bool factor(const SparseMatrix& A) {
-    compute(A);
-    return info() == Eigen::Success;
-  }
+  FactorEstimate analyze(const SparseMatrix& A) { return chol_.analyze(A); }
+  bool factor(const SparseMatrix& A) { return chol_.factorize(A); }
   // x <- P^T L^-T x  and  x <- L^-1 P x
   template <class Dense>
   void upper_solve(Dense& x) {
-    apply({CHOLMOD_Lt, CHOLMOD_Pt}, x);
+    chol_.upper_solve(x.data(), long(x.rows()), long(x.cols()));
   }
   template <class Dense>
   void lower_solve(Dense& x) {
-    apply({CHOLMOD_P, CHOLMOD_L}, x);
+    chol_.lower_solve(x.data(), long(x.rows()), long(x.cols()));
   }
 
  private:
-  template <class Dense>
-  void apply(std::initializer_list<int> systems, Dense& x) {
-    for (int sys : systems) {
-      cholmod_dense b = Eigen::viewAsCholmod(x);
-      cholmod_dense* r = cholmod_solve(sys, m_cholmodFactor, &b, &m_cholmod);
-      if (!r) throw InternalError("CHOLMOD solve failed (out of memory?)");
-      x = Eigen::Map<Dense>(static_cast<double*>(r->x), x.rows(), x.cols());
-      cholmod_free_dense(&r, &m_cholmod);
-    }
-  }
+  CholmodFactor chol_;
 };
 #else
 constexpr const char* kFactorName = "Eigen SimplicialLDLT";
@@ -70,6 +64,7 @@ constexpr const char* kFactorName = "Eigen SimplicialLDLT";
 // P A P^T = L D L^T; the split factor is L D^1/2.
 class Factor {
  public:
+  FactorEstimate analyze(const SparseMatrix&) { return {}; }  // unknown before factorizing
   bool factor(const SparseMatrix& A) {
     ldlt_.compute(A);
     if (ldlt_.info() != Eigen::Success || (ldlt_.vectorD().array() <= 0).any()) return false;
@@ -101,8 +96,15 @@ class SplitShiftInvert {
   SplitShiftInvert(const SparseMatrix& K, const SparseMatrix& M) : K_(K), M_(M), w_(K.rows()) {}
   Eigen::Index rows() const { return K_.rows(); }
   Eigen::Index cols() const { return K_.cols(); }
+  // The pattern of K - sigma M is the same for every sigma: analyzed once.
+  FactorEstimate analyze() {
+    SparseMatrix A = K_ - M_;
+    A.makeCompressed();
+    return factor_.analyze(A);
+  }
   void factor(double sigma) {
-    const SparseMatrix A = K_ - sigma * M_;
+    SparseMatrix A = K_ - sigma * M_;
+    A.makeCompressed();
     if (!factor_.factor(A))
       throw InputError("the sparse factorization of K - sigma M (" + std::to_string(K_.rows()) +
                        " DOFs, " + std::to_string(K_.nonZeros()) +
@@ -249,7 +251,24 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
   }
 }
 
+std::string gigabytes(double bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f GB", bytes / 1e9);
+  return buf;
+}
+
 }  // namespace
+
+double default_memory_budget() {
+  // MemAvailable counts what can be had without swapping (free plus reclaimable caches).
+  std::ifstream in("/proc/meminfo");
+  for (std::string line; std::getline(in, line);) {
+    double kb = 0;
+    if (std::sscanf(line.c_str(), "MemAvailable: %lf kB", &kb) == 1) return 0.8 * kb * 1024.0;
+  }
+  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && size > 0 ? 0.8 * double(pages) * double(size) : 0.0;
+}
 
 std::string factorization_name() {
   return kFactorName;
@@ -271,6 +290,37 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   r.factorization = kFactorName;
   auto t0 = std::chrono::steady_clock::now();
   SplitShiftInvert op(K, M);
+  const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
+  Eigen::Index nev = o.modes > 0 ? Eigen::Index(o.modes) + 6 : std::min<Eigen::Index>(32, max_nev);
+  if (o.modes > 0 && nev > max_nev)
+    throw InputError("asked for " + std::to_string(o.modes) + " modes but the mesh has only " +
+                     std::to_string(n) + " degrees of freedom (or the cap " +
+                     std::to_string(o.mode_cap) + " is lower)");
+  // Block Lanczos basis: n x dim doubles, within 4 GB and what the factor leaves of the budget.
+  const FactorEstimate est = op.analyze();
+  r.factor_entries = est.entries, r.factor_bytes = est.bytes, r.factor_flops = est.flops;
+  const double basis_cap = o.max_memory > 0 ? std::min(4e9, o.max_memory - est.bytes) : 4e9;
+  const Eigen::Index want_dim = std::max<Eigen::Index>(o.block * 4, 3 * max_nev + 64);
+  const Eigen::Index max_dim = std::max<Eigen::Index>(
+      o.block * 4, std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n)))));
+  r.basis_bytes = 8.0 * double(n) *
+                  double(o.method == EigenOptions::Method::BlockLanczos
+                             ? std::min(max_dim, want_dim)
+                             : std::min<Eigen::Index>(n, 2 * nev + 1));
+  if (status && est.bytes > 0)
+    status("factor: " + gigabytes(est.bytes) + " (nnz(L) " +
+           std::to_string(std::llround(est.entries)) + ", " +
+           std::to_string(std::llround(est.flops / 1e9)) + " GFLOP)");
+  if (o.max_memory > 0 && est.bytes + r.basis_bytes > o.max_memory)
+    throw InputError("the eigen-solve would need about " + gigabytes(est.bytes + r.basis_bytes) +
+                     " (the sparse factor of K - sigma M for " + std::to_string(n) +
+                     " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " +
+                     std::to_string(std::llround(est.entries)) + ", " +
+                     std::to_string(std::llround(est.flops / 1e9)) +
+                     " GFLOP; the Lanczos basis: " + gigabytes(r.basis_bytes) +
+                     "), more than the memory budget of " + gigabytes(o.max_memory) +
+                     ": raise --max-tet-volume (coarser elements), lower --max-freq or "
+                     "--max-modes, or raise --max-memory");
   // Round-off on a badly shaped mesh can make K - sigma M indefinite along the rigid motions
   // when |sigma| is tiny next to K's scale: move the shift further down and retry.
   for (int attempt = 0;; ++attempt) {
@@ -293,20 +343,10 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   if (llt.info() != Eigen::Success) throw InternalError("rigid-body motions are degenerate");
   const Eigen::MatrixXd MQ = llt.matrixL().solve(MR.transpose()).transpose();  // M Q
 
-  const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
-  Eigen::Index nev = o.modes > 0 ? Eigen::Index(o.modes) + 6 : std::min<Eigen::Index>(32, max_nev);
-  if (o.modes > 0 && nev > max_nev)
-    throw InputError("asked for " + std::to_string(o.modes) + " modes but the mesh has only " +
-                     std::to_string(n) + " degrees of freedom (or the cap " +
-                     std::to_string(o.mode_cap) + " is lower)");
   t0 = std::chrono::steady_clock::now();
   Eigen::VectorXd evals;
   Eigen::MatrixXd evecs;
   if (o.method == EigenOptions::Method::BlockLanczos) {
-    // Basis memory n x dim doubles, bounded to about 4 GB.
-    const Eigen::Index mem_dim = Eigen::Index(4e9 / (8.0 * double(n)));
-    const Eigen::Index max_dim =
-        std::max<Eigen::Index>(o.block * 4, std::min<Eigen::Index>(3 * max_nev + 64, mem_dim));
     const double theta_min = 1.0 / (lambda_max - sigma);
     const BlockLanczosResult bl =
         block_lanczos(op, o.modes > 0 ? nev : 0, theta_min, o.tolerance, max_dim, o.block, status);
@@ -372,8 +412,11 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   }
   if (r.rigid_removed != 6) {
     std::string hz;
-    for (double l : r.rigid_lambda)
-      hz += " " + std::to_string(std::sqrt(std::abs(l)) / two_pi).substr(0, 8);
+    for (double l : r.rigid_lambda) {
+      char buf[32];
+      std::snprintf(buf, sizeof buf, " %.6g", std::sqrt(std::abs(l)) / two_pi);
+      hz += buf;
+    }
     throw InputError("found " + std::to_string(r.rigid_removed) +
                      " modes that move the body almost rigidly instead of 6 (at" + hz +
                      " Hz): the solid is not one well-connected piece (parts joined only at an "

@@ -115,6 +115,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   eo.max_frequency = o.max_frequency;
   eo.mode_cap = o.mode_cap;
   eo.method = o.eigensolver;
+  eo.max_memory = o.max_memory < 0 ? default_memory_budget() : o.max_memory;
   r.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
   km = FemMatrices{};  // release before building the bank
   r.computed = r.eigen.lambda.size();

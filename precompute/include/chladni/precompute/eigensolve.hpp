@@ -20,7 +20,15 @@ struct EigenOptions {
   enum class Method { BlockLanczos, Spectra };
   Method method = Method::BlockLanczos;
   Eigen::Index block = 8;
+  /// Bytes the factor and the Lanczos basis may take together; 0: no limit. The symbolic
+  /// analysis says what the factor needs before any of it is allocated; above the budget
+  /// solve_modes refuses (InputError) with the numbers.
+  double max_memory = 0;
 };
+
+/// The default memory budget: 80 % of the memory available now (Linux /proc/meminfo), else of
+/// the physical memory.
+double default_memory_budget();
 
 struct EigenResult {
   std::vector<double> lambda;    ///< omega^2 of the elastic modes, ascending
@@ -34,6 +42,9 @@ struct EigenResult {
   std::string factorization;         ///< "CHOLMOD supernodal LLT" or "Eigen SimplicialLDLT"
   double shift = 0;                  ///< sigma used (rad^2/s^2)
   double factor_seconds = 0, lanczos_seconds = 0;
+  /// From the symbolic analysis (0 where the factorization cannot say in advance).
+  double factor_entries = 0, factor_bytes = 0, factor_flops = 0;
+  double basis_bytes = 0;    ///< the Lanczos basis' share of memory
   double solve_seconds = 0;  ///< part of lanczos_seconds spent in the triangular solves
 };
 

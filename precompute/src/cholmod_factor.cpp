@@ -1,0 +1,132 @@
+#include "cholmod_factor.hpp"
+
+#include <cholmod.h>
+
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "chladni/core/error.hpp"
+
+namespace chladni::precompute {
+namespace {
+
+std::string status_text(int status) {
+  switch (status) {
+    case CHOLMOD_OUT_OF_MEMORY:
+      return "out of memory";
+    case CHOLMOD_TOO_LARGE:
+      return "problem too large for its index range";
+    case CHOLMOD_NOT_POSDEF:
+      return "matrix not positive definite";
+    case CHOLMOD_INVALID:
+      return "invalid input";
+    default:
+      return "status " + std::to_string(status);
+  }
+}
+
+}  // namespace
+
+struct CholmodFactor::Impl {
+  cholmod_common c;
+  cholmod_factor* L = nullptr;
+  std::vector<SuiteSparse_long> p, i;  // the analyzed pattern, in CHOLMOD's long indices
+  long n = 0;
+
+  // A view of A (lower triangle read) over the long-index copy of its pattern.
+  cholmod_sparse view(const SparseMatrix& A) {
+    if (!A.isCompressed()) throw InternalError("CHOLMOD: the matrix must be compressed");
+    if (A.rows() != n || std::size_t(A.nonZeros()) != i.size())
+      throw InternalError("CHOLMOD: the matrix does not have the analyzed pattern");
+    cholmod_sparse s{};
+    s.nrow = s.ncol = std::size_t(n);
+    s.nzmax = i.size();
+    s.p = p.data();
+    s.i = i.data();
+    s.x = const_cast<double*>(A.valuePtr());
+    s.stype = -1;
+    s.itype = CHOLMOD_LONG;
+    s.xtype = CHOLMOD_REAL;
+    s.dtype = CHOLMOD_DOUBLE;
+    s.sorted = 1;
+    s.packed = 1;
+    return s;
+  }
+
+  void check(bool ok, const char* what) {
+    if (ok && c.status >= CHOLMOD_OK) return;
+    throw InputError(std::string("the sparse factorization failed in ") + what + " (" +
+                     status_text(c.status) +
+                     "): lower --max-freq or --max-modes, or raise --max-tet-volume");
+  }
+
+  void solve(std::initializer_list<int> systems, double* x, long rows, long cols) {
+    if (!L) throw InternalError("CHOLMOD: solve before factorization");
+    for (int sys : systems) {
+      cholmod_dense b{};
+      b.nrow = std::size_t(rows);
+      b.ncol = std::size_t(cols);
+      b.nzmax = b.d = std::size_t(rows);
+      b.nzmax *= std::size_t(cols);
+      b.x = x;
+      b.xtype = CHOLMOD_REAL;
+      b.dtype = CHOLMOD_DOUBLE;
+      cholmod_dense* r = cholmod_l_solve(sys, L, &b, &c);
+      check(r != nullptr, "a triangular solve");
+      std::memcpy(x, r->x, sizeof(double) * std::size_t(rows) * std::size_t(cols));
+      cholmod_l_free_dense(&r, &c);
+    }
+  }
+};
+
+CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {
+  cholmod_l_start(&impl_->c);
+  impl_->c.final_asis = 1;
+  impl_->c.supernodal = CHOLMOD_SUPERNODAL;
+  impl_->c.print = 0;  // failures are reported through our exceptions
+}
+
+CholmodFactor::~CholmodFactor() {
+  if (impl_->L) cholmod_l_free_factor(&impl_->L, &impl_->c);
+  cholmod_l_finish(&impl_->c);
+}
+
+FactorEstimate CholmodFactor::analyze(const SparseMatrix& A) {
+  Impl& m = *impl_;
+  if (m.L) cholmod_l_free_factor(&m.L, &m.c);
+  m.n = A.rows();
+  m.p.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
+  m.i.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  cholmod_sparse s = m.view(A);
+  m.L = cholmod_l_analyze(&s, &m.c);
+  m.check(m.L != nullptr, "the symbolic analysis");
+  FactorEstimate e;
+  e.entries = m.c.lnz;
+  e.flops = m.c.fl;
+  // Supernodal: xsize values (explicit zeros within supernodes included) and ssize indices.
+  const double values = m.L->is_super ? double(m.L->xsize) : m.c.lnz;
+  const double indices = m.L->is_super ? double(m.L->ssize) : m.c.lnz;
+  e.bytes = 8.0 * values + double(sizeof(SuiteSparse_long)) * indices;
+  return e;
+}
+
+bool CholmodFactor::factorize(const SparseMatrix& A) {
+  Impl& m = *impl_;
+  if (!m.L) throw InternalError("CHOLMOD: factorize before analyze");
+  cholmod_sparse s = m.view(A);
+  const int ok = cholmod_l_factorize(&s, m.L, &m.c);
+  if (m.c.status == CHOLMOD_NOT_POSDEF) return false;
+  m.check(ok != 0, "the numeric factorization");
+  return m.L->minor == m.L->n;
+}
+
+void CholmodFactor::upper_solve(double* x, long rows, long cols) {
+  impl_->solve({CHOLMOD_Lt, CHOLMOD_Pt}, x, rows, cols);
+}
+
+void CholmodFactor::lower_solve(double* x, long rows, long cols) {
+  impl_->solve({CHOLMOD_P, CHOLMOD_L}, x, rows, cols);
+}
+
+}  // namespace chladni::precompute

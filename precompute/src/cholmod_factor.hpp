@@ -1,0 +1,40 @@
+#pragma once
+// Supernodal Cholesky through CHOLMOD's long-index interface, every call checked. The symbolic
+// analysis comes first and reports what the numeric factorization will need (entries of L,
+// bytes, flops), so a caller can refuse before the memory is spent; factorizations then reuse it.
+// Only cholmod_factor.cpp includes CHOLMOD.
+#include <memory>
+
+#include "chladni/precompute/fem.hpp"
+
+namespace chladni::precompute {
+
+struct FactorEstimate {
+  double entries = 0;  ///< nonzeros of L
+  double bytes = 0;    ///< memory of the numeric factor (values and indices)
+  double flops = 0;    ///< floating-point operations of one factorization
+};
+
+class CholmodFactor {
+ public:
+  CholmodFactor();
+  ~CholmodFactor();
+  CholmodFactor(const CholmodFactor&) = delete;
+  CholmodFactor& operator=(const CholmodFactor&) = delete;
+
+  /// Orders and analyzes the pattern of A (symmetric; its lower triangle is read). Throws
+  /// InputError when CHOLMOD runs out of memory or the problem exceeds its index range.
+  FactorEstimate analyze(const SparseMatrix& A);
+  /// Numeric factorization of A, which must have the analyzed pattern. False when A is not
+  /// positive definite; throws InputError on any other CHOLMOD failure.
+  bool factorize(const SparseMatrix& A);
+  /// Column-major x (rows x cols) in place: x <- P^T L^-T x, and x <- L^-1 P x.
+  void upper_solve(double* x, long rows, long cols);
+  void lower_solve(double* x, long rows, long cols);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace chladni::precompute
