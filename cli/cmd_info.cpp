@@ -1,6 +1,7 @@
 // chladni info BANK [--json]: a soundbank's metadata and mode table.
 #include <cmath>
 #include <cstdio>
+#include <vector>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -22,6 +23,13 @@ void run_info(const InfoArgs& a) {
   nlohmann::json meta = nlohmann::json::parse(b.metadata_json, nullptr, false);
   if (meta.is_discarded()) meta = b.metadata_json;
   const double ln1000 = std::log(1000.0);
+  // Per-mode frequency error estimates from a sizing pass (precompute --max-modes), if any.
+  std::vector<double> ferr;
+  if (meta.is_object() && meta.contains("frequency_error_estimate") &&
+      meta["frequency_error_estimate"].is_array() &&
+      meta["frequency_error_estimate"].size() == b.mode_count())
+    for (const auto& e : meta["frequency_error_estimate"])
+      ferr.push_back(e.is_number() ? e.get<double>() : NAN);
   auto row = [&](std::size_t i) {
     const double w = b.omega[i], d = b.decay[i];
     const double wd = std::sqrt(w * w - d * d);
@@ -66,6 +74,9 @@ void run_info(const InfoArgs& a) {
            {"damping_ratio", r.zeta},
            {"t60_s", std::isfinite(r.t60) ? nlohmann::json(r.t60) : nlohmann::json(nullptr)},
            {"residual", r.res}});
+      if (!ferr.empty())
+        modes.back()["frequency_error_estimate"] =
+            std::isfinite(ferr[i]) ? nlohmann::json(ferr[i]) : nlohmann::json(nullptr);
       if (b.transfer) {
         const ModeTransfer& m = b.transfer->modes[i];
         modes.back()["transfer"] = {{"method", to_string(m.method)},
@@ -111,9 +122,13 @@ void run_info(const InfoArgs& a) {
   }
   if (meta.is_object())
     for (const auto& [k, v] : meta.items())
-      std::printf("meta      %s: %s\n", k.c_str(), v.dump().c_str());
+      if (k != "frequency_error_estimate" || ferr.empty())
+        std::printf("meta      %s: %s\n", k.c_str(), v.dump().c_str());
+  if (!ferr.empty())
+    std::printf("          f. err = how far the mode moved from the sizing pass's coarse mesh\n");
   std::printf("%zu modes\n%6s %12s %12s %12s %10s %10s", b.mode_count(), "mode", "freq (Hz)",
               "decay (1/s)", "damp. ratio", "T60 (s)", "residual");
+  if (!ferr.empty()) std::printf(" %8s", "f. err");
   if (b.transfer)
     std::printf(" %7s %5s %5s %7s %9s %9s %9s", "method", "iters", "order", "src/el.", "residual",
                 "held-out", "expansion");
@@ -121,6 +136,7 @@ void run_info(const InfoArgs& a) {
   for (std::size_t i = 0; i < b.mode_count(); ++i) {
     const auto r = row(i);
     std::printf("%6zu %12.2f %12.4g %12.3g %10.3g %10.2g", i, r.f, r.d, r.zeta, r.t60, r.res);
+    if (!ferr.empty()) std::printf(" %7.2f%%", 100 * ferr[i]);
     if (b.transfer) {
       const ModeTransfer& m = b.transfer->modes[i];
       std::printf(" %7s %5u %5u %7u %9.2e %9.2e %9.2e%s", to_string(m.method), m.iterations,

@@ -51,6 +51,7 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                       {"nonzeros", r.nonzeros},
                       {"element_order", a.order},
                       {"max_tet_volume_m3", r.max_tet_volume},
+                      {"sizing_frequency_hz", r.sizing_frequency},
                       {"max_radius_edge", r.quality.max_radius_edge},
                       {"mean_radius_edge", r.quality.mean_radius_edge},
                       {"min_dihedral_deg", r.quality.min_dihedral_deg}};
@@ -73,6 +74,12 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                 {"overdamped", r.overdamped},
                 {"below_band", r.below_band},
                 {"above_band", r.above_band}};
+  if (!r.frequency_error.empty()) {
+    nlohmann::json e = nlohmann::json::array();
+    for (double x : r.frequency_error)
+      e.push_back(std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr));
+    j["frequency_error_estimate"] = e;
+  }
   nlohmann::json freqs = nlohmann::json::array();
   for (double w : bank.omega) freqs.push_back(w / (2 * std::numbers::pi));
   j["frequencies_hz"] = freqs;
@@ -220,7 +227,8 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("--sample-rate", a->sample_rate, "Drop modes above its Nyquist frequency (Hz)")
       ->capture_default_str();
   cmd->add_option("--max-tet-volume", a->max_tet_volume,
-                  "Largest tetrahedron (m^3; 0: from --max-freq)");
+                  "Largest tetrahedron (m^3; 0: from --max-freq, or with --max-modes N from "
+                  "the N-th frequency a sizing pass on a coarse mesh finds)");
   cmd->add_option("--max-memory", a->max_memory_gb,
                   "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "
                   "80 % of the memory available): larger problems are refused before the "

@@ -2,6 +2,8 @@
 // beam theory and a free solid sphere against Lamb's solution, at the default settings.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <map>
 #include <numbers>
 
@@ -72,6 +74,50 @@ TEST(ModalFem, FreeSphereMatchesLambWithinOnePercent) {
     EXPECT_EQ(near, 5) << name << " at " << ref << " Hz";
   }
   EXPECT_NEAR(hz(b.omega[0]) / f_t2, 1.0, 0.01);  // the gravest mode is torsional
+}
+
+// A 1 m steel sphere asked for its first 10 modes at otherwise default settings: sized from
+// --max-freq (20 kHz) it would need billions of tetrahedra; the sizing pass finds the 10th mode
+// near 1.3 kHz on a coarse mesh and sizes the elements for that, and the modes (the n = 2
+// torsional and spheroidal quintuplets) land within 1 % of Lamb's solution.
+TEST(ModalFem, MaxModesSizesTheMeshFromASizingPass) {
+  const double a = 1.0;
+  PrecomputeOptions o;
+  o.max_modes = 10;
+  o.transfer = false;
+  PrecomputeReport r;
+  const Soundbank b = precompute_surface(test::icosphere(a, 3), "icosphere", o, r);
+  ASSERT_EQ(b.mode_count(), 10u);
+  const double cs = o.material.shear_speed(), nu = o.material.poisson_ratio;
+  const double f_t2 = test::lamb_torsional(2, 4)[0] * cs / (2 * std::numbers::pi * a);
+  const double f_s2 = test::lamb_spheroidal(2, nu, 4)[0] * cs / (2 * std::numbers::pi * a);
+  EXPECT_GT(r.sizing_frequency, 0.99 * std::max(f_t2, f_s2));
+  EXPECT_LT(r.sizing_frequency, 1.3 * std::max(f_t2, f_s2));
+  EXPECT_TRUE(std::any_of(r.stages.begin(), r.stages.end(),
+                          [](const StageTime& s) { return s.name == "sizing pass"; }));
+  EXPECT_LT(r.tets, 200000u);
+  for (const auto& [name, ref] :
+       {std::pair<const char*, double>{"torsional n=2", f_t2}, {"spheroidal n=2", f_s2}}) {
+    int near = 0;
+    for (double w : b.omega) near += std::abs(hz(w) / ref - 1) < 0.01;
+    EXPECT_EQ(near, 5) << name << " at " << ref << " Hz";
+  }
+  EXPECT_NE(b.metadata_json.find("sizing_frequency_hz"), std::string::npos);
+  // The coarse/fine pair's estimate bounds each mode's discretization error: against a solve
+  // with tets an eighth the size on the same (faceted) surface. (The faceting itself, 0.3 % here,
+  // is the surface's, not the elements'.)
+  ASSERT_EQ(r.frequency_error.size(), 10u);
+  PrecomputeOptions fine = o;
+  fine.max_tet_volume = r.max_tet_volume / 8;
+  PrecomputeReport rf;
+  const Soundbank bf = precompute_surface(test::icosphere(a, 3), "icosphere", fine, rf);
+  ASSERT_EQ(bf.mode_count(), 10u);
+  EXPECT_TRUE(rf.frequency_error.empty());  // one mesh: no pair
+  for (std::size_t i = 0; i < 10; ++i) {
+    const double err = std::abs(b.omega[i] / bf.omega[i] - 1);
+    EXPECT_LE(err, r.frequency_error[i] + 2e-4) << "mode " << i;
+    EXPECT_LT(r.frequency_error[i], 0.05) << "mode " << i;
+  }
 }
 
 TEST(ModalFem, FirstNModesAndBandLimitsAreHonoured) {

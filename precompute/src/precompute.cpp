@@ -4,6 +4,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 
 #include "chladni/core/error.hpp"
 
@@ -32,6 +33,44 @@ class Stopwatch {
   std::string name_;
   std::chrono::steady_clock::time_point t0_;
 };
+
+// One FEM solve: tetrahedralize at `volume`, assemble, find the modes. `sw`, when given, times
+// the three stages separately (the final pass); the sizing pass is timed as one.
+struct FemPass {
+  SurfaceMesh surface;  // the tet mesh's boundary (TetGen may split surface edges)
+  TetQuality quality;
+  std::size_t tets = 0, nodes = 0, dofs = 0, nonzeros = 0;
+  EigenResult eigen;
+};
+
+FemPass fem_pass(const SurfaceMesh& in, double volume, const PrecomputeOptions& o,
+                 const EigenOptions& eo, const Progress& p, Stopwatch* sw = nullptr) {
+  FemPass f;
+  TetOptions topt = o.tet;
+  topt.max_volume = volume;
+  const TetMesh tets = tetrahedralize(in, topt);
+  f.quality = tet_quality(tets);
+  f.tets = tets.tets.size();
+  f.surface.vertices.assign(tets.nodes.begin(), tets.nodes.begin() + tets.surface_vertices);
+  f.surface.triangles = tets.surface_triangles;
+  if (sw) sw->start("assemble");
+  const FemMesh fem = make_fem_mesh(tets, o.order);
+  f.nodes = fem.nodes.size();
+  f.dofs = fem.dofs();
+  FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
+  f.nonzeros = std::size_t(km.K.nonZeros());
+  if (sw) sw->start("eigen-solve");
+  f.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
+  return f;
+}
+
+// The coarsest tets worth meshing with: a few hundred in the bounding box.
+double coarse_max_volume(const SurfaceMesh& s) {
+  Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+  for (const Vec3& v : s.vertices)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
+  return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / 300.0;
+}
 
 }  // namespace
 
@@ -90,34 +129,65 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   if (!o.save_surface.empty()) write_obj(o.save_surface, surface);
   require_valid(r.mesh, origin, o.repair);
 
-  sw.start("tetrahedralize");
-  TetOptions topt = o.tet;
-  r.max_tet_volume = o.max_tet_volume > 0
-                         ? o.max_tet_volume
-                         : auto_max_volume(o.material, o.max_frequency, o.order, surface);
-  topt.max_volume = r.max_tet_volume;
-  const TetMesh tets = tetrahedralize(surface, topt);
-  r.quality = tet_quality(tets);
-  r.tets = tets.tets.size();
-  surface.vertices.assign(tets.nodes.begin(), tets.nodes.begin() + tets.surface_vertices);
-  surface.triangles = tets.surface_triangles;
-
-  sw.start("assemble");
-  const FemMesh fem = make_fem_mesh(tets, o.order);
-  r.nodes = fem.nodes.size();
-  r.dofs = fem.dofs();
-  FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
-  r.nonzeros = std::size_t(km.K.nonZeros());
-
-  sw.start("eigen-solve");
   EigenOptions eo;
   eo.modes = o.max_modes;
   eo.max_frequency = o.max_frequency;
   eo.mode_cap = o.mode_cap;
   eo.method = o.eigensolver;
   eo.max_memory = o.max_memory < 0 ? default_memory_budget() : o.max_memory;
-  r.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
-  km = FemMatrices{};  // release before building the bank
+  // With --max-modes and no element size given, the size comes from the modes asked for: a
+  // solve on the coarsest quality mesh the bounding box allows estimates the N-th frequency
+  // (coarse elements are stiff, so it errs high: the safe side), and the elements are sized
+  // from 1.2 times that instead of from --max-freq.
+  double volume = o.max_tet_volume;
+  std::optional<FemPass> sizing;
+  if (volume <= 0) {
+    volume = auto_max_volume(o.material, o.max_frequency, o.order, surface);
+    const double coarse = coarse_max_volume(surface);
+    if (o.max_modes > 0 && coarse > volume) {
+      sw.start("sizing pass");
+      if (p.note)
+        p.note("sizing pass: the first " + std::to_string(o.max_modes) + " modes on a coarse mesh");
+      sizing = fem_pass(surface, coarse, o, eo, p);
+      r.sizing_frequency =
+          std::sqrt(std::max(sizing->eigen.lambda.back(), 0.0)) / (2 * std::numbers::pi);
+      volume = std::min(
+          coarse, auto_max_volume(o.material, std::min(o.max_frequency, 1.2 * r.sizing_frequency),
+                                  o.order, surface));
+      if (p.note)
+        p.note("sizing pass: mode " + std::to_string(o.max_modes) + " near " +
+               std::to_string(int(r.sizing_frequency)) + " Hz; elements sized for " +
+               std::to_string(int(std::min(o.max_frequency, 1.2 * r.sizing_frequency))) + " Hz");
+    }
+  }
+  r.max_tet_volume = volume;
+  FemPass fp;
+  const bool reuse = sizing && volume >= coarse_max_volume(surface);
+  if (reuse) {
+    fp = std::move(*sizing);  // the coarse mesh already resolves the modes asked for
+  } else {
+    sw.start("tetrahedralize");
+    fp = fem_pass(surface, volume, o, eo, p, &sw);
+  }
+  // The sizing pass and the final mesh form a coarser/finer pair: how far each mode moved
+  // between them estimates the coarser one's error, and bounds the finer one's while the
+  // elements converge (quadratic elements: the error falls with h^4).
+  std::vector<double> moved;
+  if (sizing && !reuse) {
+    const std::size_t n = std::min(sizing->eigen.lambda.size(), fp.eigen.lambda.size());
+    for (std::size_t i = 0; i < n; ++i) {
+      const double fc = std::sqrt(std::max(sizing->eigen.lambda[i], 0.0));
+      const double ff = std::sqrt(std::max(fp.eigen.lambda[i], 0.0));
+      moved.push_back(ff > 0 ? std::abs(fc - ff) / ff : 0.0);
+    }
+  }
+  r.quality = fp.quality;
+  r.tets = fp.tets;
+  r.nodes = fp.nodes;
+  r.dofs = fp.dofs;
+  r.nonzeros = fp.nonzeros;
+  r.eigen = std::move(fp.eigen);
+  surface = std::move(fp.surface);
   r.computed = r.eigen.lambda.size();
   for (double res : r.eigen.residual) r.max_residual = std::max(r.max_residual, res);
 
@@ -138,6 +208,9 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
                      std::to_string(sel.overdamped) +
                      " overdamped): check --unit/--scale, the material, or raise --max-freq");
   }
+
+  if (!moved.empty())
+    for (std::size_t i : sel.kept) r.frequency_error.push_back(i < moved.size() ? moved[i] : NAN);
 
   Soundbank bank;
   bank.material = o.material;
@@ -187,6 +260,13 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   meta["tetrahedra"] = r.tets;
   meta["nodes"] = r.nodes;
   meta["max_tet_volume_m3"] = r.max_tet_volume;
+  if (r.sizing_frequency > 0) meta["sizing_frequency_hz"] = r.sizing_frequency;
+  if (!r.frequency_error.empty()) {
+    nlohmann::json e = nlohmann::json::array();
+    for (double x : r.frequency_error)
+      e.push_back(std::isfinite(x) ? nlohmann::json(std::round(x * 1e5) / 1e5) : nlohmann::json());
+    meta["frequency_error_estimate"] = e;
+  }
   meta["factorization"] = r.eigen.factorization;
   meta["modes_dropped"] = {
       {"overdamped", r.overdamped}, {"below_band", r.below_band}, {"above_band", r.above_band}};

@@ -25,7 +25,9 @@ struct PrecomputeOptions {
   double max_frequency = 20000;
   double min_frequency = 20;
   double sample_rate = 48000;  ///< damped frequencies above sample_rate / 2 are dropped
-  double max_tet_volume = 0;   ///< m^3; 0: from max_frequency (auto_max_volume)
+  /// m^3; 0: from max_frequency (auto_max_volume), or with max_modes from the N-th frequency
+  /// a sizing pass on a coarse mesh finds (times 1.2, at most max_frequency).
+  double max_tet_volume = 0;
   TetOptions tet;
   int threads = 0;
   std::size_t mode_cap = 2000;
@@ -48,6 +50,11 @@ struct PrecomputeReport {
   MeshReport mesh;
   std::vector<std::string> repairs;
   double max_tet_volume = 0;
+  /// With --max-modes: the N-th frequency found by the sizing pass on a coarse mesh (0: none).
+  double sizing_frequency = 0;
+  /// Per kept mode: |f - f_sizing| / f between the sizing pass and the final mesh (empty when
+  /// only one mesh was solved): the coarser mesh's error, and a bound on the finer one's.
+  std::vector<double> frequency_error;
   std::size_t tets = 0, nodes = 0, dofs = 0, nonzeros = 0;
   TetQuality quality;
   EigenResult eigen;  ///< vectors are released after use
