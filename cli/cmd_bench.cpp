@@ -173,7 +173,9 @@ void add_bench(CLI::App& app) {
   cmd->add_option("--modes", a->modes, "Comma-separated mode counts")->capture_default_str();
   cmd->add_option("--backend", a->backends, "Comma-separated backends: cpu, gpu")
       ->capture_default_str();
-  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")->capture_default_str();
+  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")
+      ->check(thread_count())
+      ->capture_default_str();
   cmd->add_option("--block", a->block, "Frames per block (latency)")->capture_default_str();
   cmd->add_option("--batch", a->batch, "Blocks per call for the throughput figure")
       ->capture_default_str();

@@ -1,10 +1,10 @@
 // chladni info BANK [--json]: a soundbank's metadata and mode table.
 #include <cmath>
 #include <cstdio>
-#include <vector>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <vector>
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/soundbank.hpp"

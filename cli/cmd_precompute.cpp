@@ -212,9 +212,12 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("--material", a->material,
                   "Preset (chladni materials lists them), NAME or NAME:VARIANT")
       ->capture_default_str();
-  cmd->add_option("--E", a->E, "Young's modulus (Pa), overrides the preset");
-  cmd->add_option("--nu", a->nu, "Poisson's ratio, overrides the preset");
-  cmd->add_option("--rho", a->rho, "Density (kg/m^3), overrides the preset");
+  cmd->add_option("--E", a->E, "Young's modulus (Pa), overrides the preset")
+      ->check(finite_in(1e3, 1e13));
+  cmd->add_option("--nu", a->nu, "Poisson's ratio, overrides the preset")
+      ->check(finite_in(-1, 0.5));
+  cmd->add_option("--rho", a->rho, "Density (kg/m^3), overrides the preset")
+      ->check(finite_in(1, 1e5));
   cmd->add_option("--damping", a->damping,
                   "rayleigh:A1,A2 | caughey:A1,...,AN | power:A1,A2 | hybrid:R1,R2,P1,P2");
   cmd->add_option("--order", a->order, "Element order: 1 (linear) or 2 (quadratic)")
@@ -244,6 +247,7 @@ void add_precompute(CLI::App& app) {
                   "--repair fills holes up to this many edges")
       ->capture_default_str();
   cmd->add_option("--threads", a->threads, "Assembly threads (0: all cores)")
+      ->check(thread_count())
       ->capture_default_str();
   cmd->add_option("--json", a->json_path, "Write a JSON summary (stages, timings, modes)");
   cmd->add_flag("-q,--quiet", a->quiet, "No progress and no summary");

@@ -181,13 +181,16 @@ void add_render(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--sample-rate", a->sample_rate, "Override the scene's sample rate (Hz)");
   cmd->add_option("--block", a->block, "Frames per filterbank call")->capture_default_str();
-  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")->capture_default_str();
+  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")
+      ->check(thread_count())
+      ->capture_default_str();
   cmd->add_option("--isa", a->isa, "CPU instruction set: auto, scalar, avx2, avx512")
       ->capture_default_str();
   cmd->add_option("--max-modes", a->max_modes, "Resident mode budget (0: all modes of the scene)");
   cmd->add_option("--retire-db", a->retire_db, "Retire modes this far below their peak (dB)")
       ->capture_default_str();
-  cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)");
+  cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)")
+      ->check(finite_in(-120, 0));
   cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")
       ->capture_default_str();
   cmd->add_flag("-q,--quiet", a->quiet, "Print nothing but errors");

@@ -201,10 +201,13 @@ void add_shake(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--backend", a->backend, "Filterbank and excitation: cpu or gpu")
       ->capture_default_str();
-  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")->capture_default_str();
+  cmd->add_option("--threads", a->threads, "CPU threads (0: all)")
+      ->check(thread_count())
+      ->capture_default_str();
   cmd->add_option("--sample-rate", a->sample_rate, "Hz")->capture_default_str();
   cmd->add_option("--block", a->block, "Frames per filterbank call")->capture_default_str();
-  cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)");
+  cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)")
+      ->check(finite_in(-120, 0));
   cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")
       ->capture_default_str();
   cmd->add_option("--spectrogram", a->spectrogram, "Also write the sound's spectrogram as PNG");

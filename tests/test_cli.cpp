@@ -66,6 +66,21 @@ TEST(Cli, BadArgumentsExitWith2) {
   EXPECT_EQ(run("render /nonexistent.json -o " + chladni::test::temp_path("x.wav")).code, 2);
   EXPECT_EQ(run("bench --modes 10,abc").code, 2);
   EXPECT_EQ(run("no-such-command").code, 2);
+  // Numbers a user can type are bounded before any work: thread counts, and levels that would
+  // turn every sample into NaN.
+  const std::string scene =
+      CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + chladni::test::temp_path("x.wav");
+  for (const char* bad : {" --threads 100000", " --threads -1", " --normalize inf",
+                          " --normalize nan", " --normalize 1e308", " --normalize abc"}) {
+    const Result r = run("render " + scene + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    EXPECT_NE(r.output.find(std::string(bad).substr(1, std::string(bad).find(' ', 1) - 1)),
+              std::string::npos)
+        << "the message names the option: " << r.output;
+  }
+  EXPECT_EQ(run("shake maraca -o " + chladni::test::temp_path("x.wav") + " --threads 100000").code,
+            2);
+  EXPECT_EQ(run("bench --threads 100000").code, 2);
 }
 
 TEST(Cli, MissingVulkanDeviceFallsBackToCpuWithOneWarning) {
@@ -194,6 +209,15 @@ TEST(CliPrecompute, BadArgumentsNameTheProblem) {
   r = run("precompute " + bar + " -o " + out + " --nu 0.5");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("Poisson's ratio"), std::string::npos);
+  // A non-finite material constant is refused, not silently replaced by the preset's.
+  for (const char* bad :
+       {" --E nan", " --nu nan", " --rho inf", " --E -2e11", " --threads 100000"}) {
+    r = run("precompute " + bar + " -o " + out + bad);
+    EXPECT_EQ(r.code, 2) << bad << ": " << r.output;
+    EXPECT_NE(r.output.find(std::string(bad).substr(1, std::string(bad).find(' ', 1) - 1)),
+              std::string::npos)
+        << r.output;
+  }
   r = run("precompute " + bar + " -o " + out + " --damping rayleigh:1");
   EXPECT_EQ(r.code, 2);
   r = run("precompute " + bar + " -o " + out + " --order 3");
