@@ -155,14 +155,18 @@ void run_radiate(const RadiateArgs& a) {
   const precompute::NormalVelocity un_of = surf.from_vertex_values(un);
   std::vector<cd> a_lm, surface_p, surface_q;
   precompute::SourceFit fit;
+  std::unique_ptr<precompute::BemSurface> elements;
   std::unique_ptr<precompute::BemMesh> bem_mesh;
   ModeTransfer mt;
   if (bem) {
-    bem_mesh = std::make_unique<precompute::BemMesh>(mesh);
+    // The surface's triangles, split as often as the wavelength asks (within the element cap).
+    elements = std::make_unique<precompute::BemSurface>(
+        mesh, std::max(0, precompute::bem_level(surf, k, o)));
+    bem_mesh = std::make_unique<precompute::BemMesh>(elements->mesh);
     o.bem.gpu = ctx;
     precompute::BemSolver solver(*bem_mesh, o.bem);
-    mt = precompute::bem_transfer(surf, *bem_mesh, solver, k, un_of, o, a_lm, nullptr, &surface_p,
-                                  &surface_q);
+    mt = precompute::bem_transfer(surf, *elements, *bem_mesh, solver, k, un_of, o, a_lm, nullptr,
+                                  &surface_p, &surface_q);
   } else {
     fit = precompute::fit_sources(surf, k, un_of, o, *kernels);
     mt = precompute::expand_sources(surf, fit, o, *kernels, a_lm);

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 #include <numbers>
 
 #include "chladni/core/error.hpp"
@@ -35,32 +36,45 @@ double null_field_error(const BemMesh& mesh, double k, const std::vector<cd>& p,
 
 }  // namespace
 
+int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& o) {
+  const double target = 2 * std::numbers::pi / o.bem_elements_per_wavelength;
+  double n = double(surface.mesh().triangles.size()), h = surface.mean_element_size();
+  int fits = -1;
+  for (int level = 0; level <= 4 && n <= double(o.bem_auto_elements); ++level, n *= 4, h /= 2) {
+    fits = level;
+    if (h * k <= target) return level;
+  }
+  return o.method == AcousticOptions::Method::Bem ? std::max(fits, 0) : -1;
+}
+
 AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,
                                        const AcousticOptions& o) {
   using M = AcousticOptions::Method;
   if (o.method != M::Auto) return o.method;
-  const bool fits = surface.mesh().triangles.size() <= o.bem_auto_elements;
-  const bool resolves =
-      surface.mean_element_size() * k <= 2 * std::numbers::pi / o.bem_elements_per_wavelength;
-  return fits && resolves ? M::Bem : M::Sources;
+  return bem_level(surface, k, o) >= 0 ? M::Bem : M::Sources;
 }
 
-ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, BemSolver& solver,
-                          double k, const NormalVelocity& un, const AcousticOptions& o,
-                          std::vector<cd>& a, TransferTimes* times, std::vector<cd>* pressure,
-                          std::vector<cd>* dpdn) {
+ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& elements,
+                          const BemMesh& mesh, BemSolver& solver, double k,
+                          const NormalVelocity& un, const AcousticOptions& o, std::vector<cd>& a,
+                          TransferTimes* times, std::vector<cd>* pressure, std::vector<cd>* dpdn) {
   const std::size_t n = mesh.elements();
-  if (n != surface.mesh().triangles.size())
-    throw InternalError("bem: the boundary mesh is not the surface's");
-  // dp/dn = i omega rho0 u_n, averaged over each element (3 points).
+  if (n != elements.parent.size())
+    throw InternalError("bem: the boundary mesh is not the surface's elements");
+  // dp/dn = i omega rho0 u_n, averaged over each element (3 points, mapped into the parent).
   const cd neumann(0.0, k * o.sound_speed * o.air_density);
+  constexpr double kPoints[3][3] = {
+      {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
   std::vector<cd> q(n);
   for (std::size_t j = 0; j < n; ++j) {
-    const auto t = static_cast<uint32_t>(j);
-    q[j] = neumann *
-           (un(t, {2.0 / 3, 1.0 / 6, 1.0 / 6}) + un(t, {1.0 / 6, 2.0 / 3, 1.0 / 6}) +
-            un(t, {1.0 / 6, 1.0 / 6, 2.0 / 3})) /
-           3.0;
+    cd sum = 0;
+    for (const auto& b : kPoints) {
+      std::array<double, 3> in_parent{0, 0, 0};
+      for (int c = 0; c < 3; ++c)
+        for (int d = 0; d < 3; ++d) in_parent[d] += b[c] * elements.corners[j][c][d];
+      sum += un(elements.parent[j], in_parent);
+    }
+    q[j] = neumann * sum / 3.0;
   }
   const BemSolver::Times before = solver.times();
   const BemSolver::Result res = solver.solve(k, q);
@@ -112,12 +126,24 @@ void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank
                           TransferTimes* times, const std::function<void()>& done) {
   if (which.empty()) return;
   const std::size_t nv = bank.vertices.size();
-  const BemMesh mesh(surface.mesh());
-  BemSolver solver(mesh, o.bem);
+  // One element mesh (and solver, whose LU nearby frequencies share) per refinement level, built
+  // as the ascending frequencies first need it.
+  std::unique_ptr<BemSurface> elements;
+  std::unique_ptr<BemMesh> mesh;
+  std::unique_ptr<BemSolver> solver;
   for (std::size_t i : which) {
     const double omega = bank.damped_omega(i);  // radiates at the damped frequency
+    const double k = omega / o.sound_speed;
+    const int level = std::max(0, bem_level(surface, k, o));
+    if (!elements || elements->level != level) {
+      solver.reset();
+      mesh.reset();
+      elements = std::make_unique<BemSurface>(surface.mesh(), level);
+      mesh = std::make_unique<BemMesh>(elements->mesh);
+      solver = std::make_unique<BemSolver>(*mesh, o.bem);
+    }
     const NormalVelocity un = surface.from_mode_shape(bank.shapes.data() + i * nv * 3, omega);
-    modes[i] = bem_transfer(surface, mesh, solver, omega / o.sound_speed, un, o, coeffs[i], times);
+    modes[i] = bem_transfer(surface, *elements, *mesh, *solver, k, un, o, coeffs[i], times);
     if (done) done();
   }
 }

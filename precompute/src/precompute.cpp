@@ -40,17 +40,22 @@ struct FemPass {
   SurfaceMesh surface;  // the tet mesh's boundary (TetGen may split surface edges)
   TetQuality quality;
   std::size_t tets = 0, nodes = 0, dofs = 0, nonzeros = 0;
+  std::size_t corner_nodes = 0;  // the tet mesh's own vertices (before P2 midside nodes)
   EigenResult eigen;
 };
 
-FemPass fem_pass(const SurfaceMesh& in, double volume, const PrecomputeOptions& o,
-                 const EigenOptions& eo, const Progress& p, Stopwatch* sw = nullptr) {
-  FemPass f;
+TetMesh tets_for(const SurfaceMesh& in, double volume, const PrecomputeOptions& o) {
   TetOptions topt = o.tet;
   topt.max_volume = volume;
-  const TetMesh tets = tetrahedralize(in, topt);
+  return tetrahedralize(in, topt);
+}
+
+FemPass fem_pass(const TetMesh& tets, const PrecomputeOptions& o, const EigenOptions& eo,
+                 const Progress& p, Stopwatch* sw = nullptr) {
+  FemPass f;
   f.quality = tet_quality(tets);
   f.tets = tets.tets.size();
+  f.corner_nodes = tets.nodes.size();
   f.surface.vertices.assign(tets.nodes.begin(), tets.nodes.begin() + tets.surface_vertices);
   f.surface.triangles = tets.surface_triangles;
   if (sw) sw->start("assemble");
@@ -148,7 +153,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
       sw.start("sizing pass");
       if (p.note)
         p.note("sizing pass: the first " + std::to_string(o.max_modes) + " modes on a coarse mesh");
-      sizing = fem_pass(surface, coarse, o, eo, p);
+      sizing = fem_pass(tets_for(surface, coarse, o), o, eo, p);
       r.sizing_frequency =
           std::sqrt(std::max(sizing->eigen.lambda.back(), 0.0)) / (2 * std::numbers::pi);
       volume = std::min(
@@ -162,12 +167,20 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   }
   r.max_tet_volume = volume;
   FemPass fp;
-  const bool reuse = sizing && volume >= coarse_max_volume(surface);
-  if (reuse) {
-    fp = std::move(*sizing);  // the coarse mesh already resolves the modes asked for
-  } else {
+  std::optional<TetMesh> tets;
+  if (!sizing || volume < coarse_max_volume(surface)) {
     sw.start("tetrahedralize");
-    fp = fem_pass(surface, volume, o, eo, p, &sw);
+    tets = tets_for(surface, volume, o);
+  }
+  // The coarse mesh already resolves the modes asked for when the sizing asks for nothing finer,
+  // or when the surface alone decides the elements (TetGen returns the same mesh).
+  const bool reuse =
+      sizing &&
+      (!tets || (tets->tets.size() == sizing->tets && tets->nodes.size() == sizing->corner_nodes));
+  if (reuse) {
+    fp = std::move(*sizing);
+  } else {
+    fp = fem_pass(*tets, o, eo, p, &sw);
   }
   // The sizing pass and the final mesh form a coarser/finer pair: how far each mode moved
   // between them estimates the coarser one's error, and bounds the finer one's while the

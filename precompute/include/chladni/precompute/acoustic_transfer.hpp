@@ -142,11 +142,24 @@ ModeTransfer finish_expansion(
 /// Expansion order for wavenumber k on a surface of radius R: kR + 2 (kR)^(1/3) + 8, capped.
 int expansion_order(double k, double radius, const AcousticOptions& options);
 
-/// One mode by boundary elements on `mesh` (the surface's own triangles): dp/dn per element from
+/// The boundary elements of a surface: its triangles split into four at their edge midpoints
+/// `level` times (the geometry stays the surface's; the elements halve per level), each element
+/// with its parent triangle and its corners' barycentric coordinates in it, so the normal
+/// velocity (linear on each parent) carries over.
+struct BemSurface {
+  BemSurface(const SurfaceMesh& base, int level);
+  int level = 0;
+  SurfaceMesh mesh;
+  std::vector<uint32_t> parent;
+  std::vector<std::array<std::array<double, 3>, 3>> corners;
+};
+
+/// One mode by boundary elements on `mesh`, the elements of `elements`: dp/dn per element from
 /// `un`, the Burton-Miller solve, c_lm by quadrature, trimmed and checked. Optionally returns the
 /// surface pressure and dp/dn per element.
-ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, BemSolver& solver,
-                          double k, const NormalVelocity& un, const AcousticOptions& options,
+ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& elements,
+                          const BemMesh& mesh, BemSolver& solver, double k,
+                          const NormalVelocity& un, const AcousticOptions& options,
                           std::vector<std::complex<double>>& a, TransferTimes* times = nullptr,
                           std::vector<std::complex<double>>* pressure = nullptr,
                           std::vector<std::complex<double>>* dpdn = nullptr);
@@ -154,6 +167,11 @@ ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemMesh& mesh, 
 /// The method compute_transfer uses for a mode of wavenumber k on this surface (Bem or Sources).
 AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,
                                        const AcousticOptions& options);
+
+/// How many times BEM splits the surface's triangles for wavenumber k: the fewest that give
+/// bem_elements_per_wavelength within bem_auto_elements elements; -1 when none does (with
+/// method Bem forced: the most that fit, at least 0).
+int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& options);
 
 /// compute_transfer's BEM path for the listed modes (ascending frequency, so each GMRES solve is
 /// preconditioned by the LU of a nearby frequency); fills modes[i] and coeffs[i] of each.
