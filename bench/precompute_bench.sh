@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Precompute speed on the bundled meshes (docs/PERFORMANCE.md, "Precompute"). Each case runs
-# `chladni precompute --json` and one table row is printed from its summary.
+# `chladni precompute --json --no-transfer` (the modes only; transfer has its own benchmarks) and
+# one table row is printed from its summary.
 # Usage: bash bench/precompute_bench.sh [path/to/chladni]     (default: build/cli/chladni)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -11,7 +12,7 @@ trap 'rm -rf "$out"' EXIT
 row() {  # name, then the precompute arguments
   local name=$1
   shift
-  "$chladni" precompute "$@" -o "$out/bank.chbank" --json "$out/s.json" -q
+  "$chladni" precompute "$@" -o "$out/bank.chbank" --json "$out/s.json" -q --no-transfer
   python3 - "$name" "$out/s.json" <<'PY'
 import json, sys
 name, path = sys.argv[1], sys.argv[2]
