@@ -340,7 +340,7 @@ TEST(Phisem, SceneShakeEventsRenderOnBothBackendsAndNameBadInput) {
   std::vector<ObjectModes> objects = {object_modes(bar_model),
                                       object_modes(scene.objects[1].modes)};
   const SceneShakers shakers = scene_shakers(scene, objects);
-  ASSERT_EQ(shakers.first_event.size(), 3u);  // the two gravel shakes share a voice
+  ASSERT_EQ(shakers.first_event.size(), 3u);      // the two gravel shakes share a voice
   EXPECT_EQ(shakers.voice[0], shakers.voice[2]);  // sorted by time: gravel, coins, gravel
   EXPECT_EQ(shakers.slots, bar_model.mode_count() + 1 + 1);
   const uint32_t cap = 2048 + shakers.slots;
