@@ -13,6 +13,7 @@
 
 #include "backend.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "chladni/core/paper_animation.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
 #include "chladni/runtime/paper_database.hpp"
@@ -114,6 +115,9 @@ nlohmann::json resonator_json(const runtime::PaperResonator& r) {
 }
 
 void run_analyze(const AnalyzeArgs& a) {
+  if (!a.output.empty()) check_output_path(a.output, "output");
+  if (!a.events.empty()) check_output_path(a.events, "--events");
+  if (!a.spectrogram.empty()) check_output_path(a.spectrogram, "--spectrogram");
   PaperAnimation anim = load_paper_animation(a.animation);
   if (!a.output.empty()) {
     run_synthesis(a, anim);
@@ -157,15 +161,15 @@ void run_analyze(const AnalyzeArgs& a) {
               crumple, frames.size(), resonators);
   std::printf("  analysis: %.3f ms per frame\n", 1e3 * seconds / anim.frame_count());
   if (!a.events.empty()) {
-    std::ofstream out(a.events);
-    out << nlohmann::json{{"animation", a.animation},
-                          {"frame_rate", anim.frame_rate},
-                          {"frames", anim.frame_count()},
-                          {"ms_per_frame", 1e3 * seconds / anim.frame_count()},
-                          {"event_frames", std::move(frames)}}
-               .dump(1)
-        << "\n";
-    if (!out) throw InputError("cannot write " + a.events);
+    write_file_atomic(a.events,
+                      nlohmann::json{{"animation", a.animation},
+                                     {"frame_rate", anim.frame_rate},
+                                     {"frames", anim.frame_count()},
+                                     {"ms_per_frame", 1e3 * seconds / anim.frame_count()},
+                                     {"event_frames", std::move(frames)}}
+                              .dump(1) +
+                          "\n",
+                      "--events");
     std::printf("wrote %s\n", a.events.c_str());
   }
 }

@@ -10,6 +10,7 @@
 
 #include "backend.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
@@ -104,6 +105,10 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
 }
 
 void run_precompute(const PrecomputeArgs& a) {
+  // Every output is checked before the work (minutes, sometimes) that fills it.
+  check_output_path(a.output, "soundbank");
+  if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
+  if (!a.save_surface.empty()) check_output_path(a.save_surface, "--save-surface");
   precompute::PrecomputeOptions o;
   o.scale = precompute::unit_scale(a.unit) * a.scale;
   o.repair = a.repair;
@@ -156,11 +161,8 @@ void run_precompute(const PrecomputeArgs& a) {
   bar.finish();
   write_soundbank(a.output, bank);
 
-  if (!a.json_path.empty()) {
-    std::ofstream f(a.json_path);
-    if (!f) throw InputError("cannot write " + a.json_path);
-    f << summary_json(a, r, bank).dump(2) << '\n';
-  }
+  if (!a.json_path.empty())
+    write_file_atomic(a.json_path, summary_json(a, r, bank).dump(2) + "\n", "--json");
   if (a.quiet) return;
   std::printf("mesh %s: %zu vertices, %zu triangles, volume %.4g m^3\n", a.mesh.c_str(),
               r.mesh.vertices, r.mesh.triangles, r.mesh.volume);

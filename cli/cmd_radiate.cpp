@@ -13,6 +13,7 @@
 
 #include "backend.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/core/transfer.hpp"
 #include "chladni/gpu/context.hpp"
@@ -115,6 +116,7 @@ std::vector<cd> pattern_velocity(const std::string& spec, const precompute::Surf
 }
 
 void run_radiate(const RadiateArgs& a) {
+  if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
   if (!(a.freq > 0) || !std::isfinite(a.freq)) throw InputError("--freq must be finite and > 0");
   if (a.velocity.empty() == a.pattern.empty())
     throw InputError("give exactly one of --velocity FILE and --pattern NAME");
@@ -207,11 +209,7 @@ void run_radiate(const RadiateArgs& a) {
                    {"z", pts[i][2]},
                    {"pressure", {{"re", p[i].real()}, {"im", p[i].imag()}}}});
   j["points"] = out;
-  if (!a.json_path.empty()) {
-    std::ofstream f(a.json_path);
-    if (!f) throw InputError("cannot write " + a.json_path);
-    f << j.dump(2) << '\n';
-  }
+  if (!a.json_path.empty()) write_file_atomic(a.json_path, j.dump(2) + "\n", "--json");
   if (bem)
     std::printf(
         "%s at %.6g Hz (ka %.3g) by BEM: %u elements, residual %.2e, %u GMRES iterations, "

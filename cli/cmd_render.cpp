@@ -7,6 +7,7 @@
 #include "backend.hpp"
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
@@ -90,6 +91,7 @@ void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>
 }
 
 void run_render(const RenderArgs& a) {
+  check_output_path(a.output, "output");
   Scene scene = load_scene(a.scene);
   if (a.sample_rate) {
     if (a.sample_rate < 8000 || a.sample_rate > 384000) {

@@ -10,6 +10,7 @@
 #include "backend.hpp"
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/runtime/filterbank.hpp"
 #include "chladni/runtime/render.hpp"
@@ -73,6 +74,8 @@ void run_shake(const ShakeArgs& a) {
   if (a.list) return list_instruments();
   if (a.instrument.empty()) throw InputError("name an instrument (chladni shake --list)");
   if (a.output.empty()) throw InputError("-o OUT.wav is required");
+  check_output_path(a.output, "output");
+  if (!a.spectrogram.empty()) check_output_path(a.spectrogram, "--spectrogram");
   const runtime::PhisemPreset& preset = runtime::phisem_preset(a.instrument);
   if (a.sample_rate < 8000 || a.sample_rate > 384000)
     throw InputError("--sample-rate must lie in [8000, 384000]");

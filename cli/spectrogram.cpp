@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -74,23 +75,35 @@ void write_spectrogram_png(const std::string& path, const AudioBuffer& audio,
       colour(1 + db / o.range_db, &image[((height - 1 - y) * width + x) * 3]);
     }
 
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "wb"), &std::fclose);
-  if (!file) throw InputError(path + ": cannot open for writing");
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
-  png_infop info = png ? png_create_info_struct(png) : nullptr;
-  if (!png || !info) throw InternalError("libpng: out of memory");
-  if (setjmp(png_jmpbuf(png))) {  // libpng reports errors by longjmp
+  // Into a temporary beside the target, renamed over it once complete.
+  const std::string tmp = temporary_path(path);
+  {
+    std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(tmp.c_str(), "wb"), &std::fclose);
+    if (!file) throw InputError(path + ": cannot open for writing");
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = png ? png_create_info_struct(png) : nullptr;
+    if (!png || !info) throw InternalError("libpng: out of memory");
+    if (setjmp(png_jmpbuf(png))) {  // libpng reports errors by longjmp
+      png_destroy_write_struct(&png, &info);
+      file.reset();
+      std::remove(tmp.c_str());
+      throw InputError(path + ": writing the PNG failed");
+    }
+    png_init_io(png, file.get());
+    png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8,
+                 PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+                 PNG_FILTER_TYPE_DEFAULT);
+    png_write_info(png, info);
+    for (int y = 0; y < height; ++y) png_write_row(png, &image[std::size_t(y) * width * 3]);
+    png_write_end(png, nullptr);
     png_destroy_write_struct(&png, &info);
-    throw InputError(path + ": writing the PNG failed");
+    if (std::fflush(file.get()) != 0) {
+      file.reset();
+      std::remove(tmp.c_str());
+      throw InputError(path + ": writing the PNG failed");
+    }
   }
-  png_init_io(png, file.get());
-  png_set_IHDR(png, info, static_cast<png_uint_32>(width), static_cast<png_uint_32>(height), 8,
-               PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
-               PNG_FILTER_TYPE_DEFAULT);
-  png_write_info(png, info);
-  for (int y = 0; y < height; ++y) png_write_row(png, &image[std::size_t(y) * width * 3]);
-  png_write_end(png, nullptr);
-  png_destroy_write_struct(&png, &info);
+  commit_temporary(tmp, path, "spectrogram");
 }
 
 }  // namespace chladni::cli

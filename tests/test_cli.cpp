@@ -254,6 +254,51 @@ TEST(CliPrecompute, MemoryBudgetRefusesBeforeTheFactorization) {
   EXPECT_NE(r.output.find("--max-memory"), std::string::npos) << r.output;
 }
 
+// Outputs are checked before the work that fills them, and replaced atomically: a bad path
+// fails at once with exit 2 and leaves what was there; a good run leaves no temporaries behind.
+TEST(CliOutputs, CheckedFirstAndReplacedAtomically) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::path(chladni::test::temp_path("chladni_outputs"));
+  fs::remove_all(dir);
+  fs::create_directories(dir / "a_folder");
+  const std::string bank = (dir / "bank.chbank").string();
+  std::ofstream(bank) << "keep";
+  const std::string bar = CHLADNI_SOURCE_DIR "/meshes/bar.obj";
+  Result r = run("precompute " + bar + " -o " + bank + " --max-modes 2 --max-tet-volume 1e-6 " +
+                 "--no-transfer --json " + (dir / "a_folder").string());
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("--json " + (dir / "a_folder").string() + ": is a directory"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(chladni::test::read_file(bank), "keep");
+  r = run("precompute " + bar + " -o " + (dir / "a_folder").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("is a directory"), std::string::npos) << r.output;
+  r = run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " +
+          (dir / "missing" / "x.wav").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("does not exist"), std::string::npos) << r.output;
+  r = run("shake maraca --duration 0.2 -o " + (dir / "m.wav").string() + " --spectrogram " +
+          (dir / "a_folder").string());
+  EXPECT_EQ(r.code, 2);
+  EXPECT_FALSE(fs::exists(dir / "m.wav"));
+  // A good run replaces the bank and the WAV in one step each and leaves nothing else.
+  r = run("precompute " + bar + " -o " + bank + " --max-modes 2 --max-tet-volume 1e-6 " +
+          "--no-transfer -q --json " + (dir / "s.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = run("shake maraca --duration 0.2 -o " + (dir / "m.wav").string() + " --spectrogram " +
+          (dir / "m.png").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  std::size_t files = 0;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    files += e.is_regular_file();
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+  }
+  EXPECT_EQ(files, 4u);  // bank, s.json, m.wav, m.png
+  EXPECT_NE(chladni::test::read_file(bank), "keep");
+  fs::remove_all(dir);
+}
+
 TEST(CliPrecompute, NoTransferLeavesXferOut) {
   const std::string bank = chladni::test::temp_path("chladni_cli_bar_nox.chbank");
   Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank +

@@ -2,7 +2,10 @@
 
 #include <sndfile.h>
 
+#include <filesystem>
+
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 
 namespace chladni {
 
@@ -16,14 +19,21 @@ void write_wav(const std::string& path, const AudioBuffer& audio, SampleFormat f
   info.format = SF_FORMAT_WAV | (format == SampleFormat::Float32 ? SF_FORMAT_FLOAT
                                  : format == SampleFormat::Pcm24 ? SF_FORMAT_PCM_24
                                                                  : SF_FORMAT_PCM_16);
-  SNDFILE* f = sf_open(path.c_str(), SFM_WRITE, &info);
+  // Into a temporary beside the target, renamed over it once complete.
+  const std::string tmp = temporary_path(path);
+  SNDFILE* f = sf_open(tmp.c_str(), SFM_WRITE, &info);
   if (!f) throw InputError("cannot write " + path + ": " + sf_strerror(nullptr));
   if (format != SampleFormat::Float32) sf_command(f, SFC_SET_CLIPPING, nullptr, SF_TRUE);
   const sf_count_t frames = static_cast<sf_count_t>(audio.frames());
   const sf_count_t written = sf_writef_float(f, audio.samples.data(), frames);
   const std::string err = sf_strerror(f);
   sf_close(f);
-  if (written != frames) throw InternalError("short write to " + path + ": " + err);
+  if (written != frames) {
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw InputError("cannot write " + path + ": short write (" + err + ")");
+  }
+  commit_temporary(tmp, path, "audio file");
 }
 
 AudioBuffer read_audio(const std::string& path) {

@@ -12,6 +12,7 @@
 
 #include "binary_io.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 
 namespace chladni {
 namespace {
@@ -343,20 +344,9 @@ Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& 
 
 void write_soundbank(const std::string& path, const Soundbank& bank) {
   const std::vector<uint8_t> bytes = serialize_soundbank(bank);
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-    if (!f) throw InputError("cannot write soundbank " + path + ": cannot open " + tmp);
-    f.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-    if (!f.flush()) throw InputError("cannot write soundbank " + path + ": write failed");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw InputError("cannot write soundbank " + path + ": " + ec.message());
-  }
+  write_file_atomic(path,
+                    std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                    "soundbank");
 }
 
 Soundbank read_soundbank(const std::string& path) {
