@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -131,8 +132,6 @@ void run_precompute(const PrecomputeArgs& a) {
   o.max_frequency = a.max_freq;
   o.sample_rate = a.sample_rate;
   o.max_tet_volume = a.max_tet_volume;
-  if (!(a.max_memory_gb < 0 || a.max_memory_gb >= 0) || std::isinf(a.max_memory_gb))
-    throw InputError("--max-memory must be a finite number of GB (0: no limit)");
   o.max_memory = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
   o.threads = a.threads;
   o.mode_cap = std::max(a.mode_cap, a.max_modes);
@@ -237,7 +236,8 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("--max-memory", a->max_memory_gb,
                   "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "
                   "80 % of the memory available): larger problems are refused before the "
-                  "factorization, with what they would need");
+                  "factorization, with what they would need")
+      ->check(finite_in(-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()));
   cmd->add_option("--mode-cap", a->mode_cap, "Most modes searched for below --max-freq")
       ->capture_default_str();
   cmd->add_option("--eigensolver", a->eigensolver,

@@ -17,14 +17,10 @@ namespace {
 
 using cd = std::complex<double>;
 
-Vec3 cross3(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
 Vec3 area_vector(const precompute::SurfaceMesh& m, std::size_t t) {
   const auto& v = m.vertices;
   const auto& f = m.triangles[t];
-  return scale(cross3(sub(v[f[1]], v[f[0]]), sub(v[f[2]], v[f[0]])), 0.5);
+  return scale(cross(sub(v[f[1]], v[f[0]]), sub(v[f[2]], v[f[0]])), 0.5);
 }
 
 TEST(BemRefine, SplitKeepsGeometryOrientationAndParents) {

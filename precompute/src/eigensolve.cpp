@@ -18,16 +18,8 @@
 #include <thread>
 
 #include "chladni/core/error.hpp"
+#include "cholmod_factor.hpp"  // FactorEstimate in every build; CholmodFactor with CHOLMOD
 #include "timing.hpp"
-#ifdef CHLADNI_HAVE_CHOLMOD
-#include "cholmod_factor.hpp"
-#else
-namespace chladni::precompute {
-struct FactorEstimate {
-  double entries = 0, bytes = 0, flops = 0;
-};
-}  // namespace chladni::precompute
-#endif
 
 namespace chladni::precompute {
 namespace {

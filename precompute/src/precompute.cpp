@@ -69,14 +69,6 @@ FemPass fem_pass(const TetMesh& tets, const PrecomputeOptions& o, const EigenOpt
   return f;
 }
 
-// The coarsest tets worth meshing with: a few hundred in the bounding box.
-double coarse_max_volume(const SurfaceMesh& s) {
-  Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
-  for (const Vec3& v : s.vertices)
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
-  return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / 300.0;
-}
-
 }  // namespace
 
 std::vector<std::array<float, 3>> vertex_normals(const SurfaceMesh& m) {
@@ -145,10 +137,10 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   // (coarse elements are stiff, so it errs high: the safe side), and the elements are sized
   // from 1.2 times that instead of from --max-freq.
   double volume = o.max_tet_volume;
+  const double coarse = coarse_max_volume(surface);
   std::optional<FemPass> sizing;
   if (volume <= 0) {
     volume = auto_max_volume(o.material, o.max_frequency, o.order, surface);
-    const double coarse = coarse_max_volume(surface);
     if (o.max_modes > 0 && coarse > volume) {
       sw.start("sizing pass");
       if (p.note)
@@ -156,9 +148,9 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
       sizing = fem_pass(tets_for(surface, coarse, o), o, eo, p);
       r.sizing_frequency =
           std::sqrt(std::max(sizing->eigen.lambda.back(), 0.0)) / (2 * std::numbers::pi);
-      volume = std::min(
-          coarse, auto_max_volume(o.material, std::min(o.max_frequency, 1.2 * r.sizing_frequency),
-                                  o.order, surface));
+      // (At most `coarse`: auto_max_volume is bounded by it.)
+      volume = auto_max_volume(o.material, std::min(o.max_frequency, 1.2 * r.sizing_frequency),
+                               o.order, surface);
       if (p.note)
         p.note("sizing pass: mode " + std::to_string(o.max_modes) + " near " +
                std::to_string(int(r.sizing_frequency)) + " Hz; elements sized for " +
@@ -168,7 +160,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   r.max_tet_volume = volume;
   FemPass fp;
   std::optional<TetMesh> tets;
-  if (!sizing || volume < coarse_max_volume(surface)) {
+  if (!sizing || volume < coarse) {
     sw.start("tetrahedralize");
     tets = tets_for(surface, volume, o);
   }

@@ -141,15 +141,18 @@ TetQuality tet_quality(const TetMesh& m) {
   return q;
 }
 
-double auto_max_volume(const Material& mat, double max_frequency, int order, const SurfaceMesh& s) {
-  const double per_wavelength = order == 1 ? 12.0 : 6.0;
-  const double h = mat.shear_speed() / max_frequency / per_wavelength;
-  double v_wave = h * h * h / (6 * std::sqrt(2.0));
+double coarse_max_volume(const SurfaceMesh& s) {
   Vec3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
   for (const Vec3& v : s.vertices)
     for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
-  const double box = (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]);
-  return std::min(v_wave, box / 300.0);
+  return (hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2]) / 300.0;
+}
+
+double auto_max_volume(const Material& mat, double max_frequency, int order, const SurfaceMesh& s) {
+  const double per_wavelength = order == 1 ? 12.0 : 6.0;
+  const double h = mat.shear_speed() / max_frequency / per_wavelength;
+  const double v_wave = h * h * h / (6 * std::sqrt(2.0));
+  return std::min(v_wave, coarse_max_volume(s));
 }
 
 }  // namespace chladni::precompute

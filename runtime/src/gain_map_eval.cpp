@@ -5,7 +5,9 @@
 #include <cstring>
 #include <numbers>
 
-#if defined(__x86_64__)
+#include "cpu_kernels.hpp"
+
+#if CHLADNI_X86_64
 #include <immintrin.h>
 #endif
 
@@ -89,7 +91,7 @@ void gains_scalar(const GridLoop& g, std::size_t b, std::size_t e, float* block)
   }
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if CHLADNI_X86_64
 // Eight slots at a time with F16C conversions (GCC 12 does not vectorize _Float16 loads).
 [[gnu::target("avx2,f16c,fma")]] void gains8(const GridLoop& g, const uint16_t* const* p,
                                              std::size_t stride, const float* valid,
@@ -130,9 +132,9 @@ void gains_scalar(const GridLoop& g, std::size_t b, std::size_t e, float* block)
   }
 }
 
+// The filterbank's AVX2 + FMA check, plus the half-precision conversions.
 bool has_avx2_f16c() {
-  static const bool yes = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("f16c") &&
-                          __builtin_cpu_supports("fma");
+  static const bool yes = cpu::isa_supported(cpu::Isa::Avx2) && __builtin_cpu_supports("f16c");
   return yes;
 }
 #endif
@@ -153,7 +155,7 @@ void grid_gains(const GainMap::Grid& g, const GridCell& cell, float s, float* ou
   float block[kBlock];
   for (std::size_t b = 0; b < loop.cnt; b += kBlock) {
     const std::size_t e = std::min(loop.cnt, b + kBlock);
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if CHLADNI_X86_64
     if (has_avx2_f16c())
       gains_avx2(loop, b, e, block);
     else

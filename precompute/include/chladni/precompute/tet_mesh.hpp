@@ -38,10 +38,13 @@ TetMesh tetrahedralize(const SurfaceMesh& surface, const TetOptions& options);
 
 TetQuality tet_quality(const TetMesh& mesh);
 
+/// The coarsest tets worth meshing with: a few hundred in the surface's bounding box.
+double coarse_max_volume(const SurfaceMesh& surface);
+
 /// Largest tet volume that resolves the shortest wave of interest: the shear wavelength at
 /// `max_frequency` divided by `per_wavelength` (12 for linear, 6 for quadratic elements) gives
-/// the edge length h, and a regular tet of edge h has volume h^3 / (6 sqrt 2). Also bounded so
-/// that the object's bounding box holds at least a few hundred elements.
+/// the edge length h, and a regular tet of edge h has volume h^3 / (6 sqrt 2). At most
+/// coarse_max_volume.
 double auto_max_volume(const Material& material, double max_frequency, int order,
                        const SurfaceMesh& surface);
 
