@@ -1,4 +1,4 @@
-// Mesh reading in four formats, the validity checks on good and broken meshes, and repair.
+// The validity checks on good and broken meshes, repair and tetrahedralization.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -50,80 +50,6 @@ std::string message_of(const SurfaceMesh& m) {
 }
 
 }  // namespace
-
-TEST(MeshIo, ReadsTheSameCubeFromObjOffPlyAndStl) {
-  std::string off = "OFF\n8 12 0\n", ply, stl = "solid cube\n";
-  for (auto& v : kCubeV)
-    off += std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) + "\n";
-  for (auto& f : kCubeF)
-    off += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
-           "\n";
-  ply =
-      "ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\nproperty float "
-      "z\n"
-      "element face 12\nproperty list uchar int vertex_indices\nend_header\n";
-  for (auto& v : kCubeV)
-    ply += std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]) + "\n";
-  for (auto& f : kCubeF)
-    ply += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
-           "\n";
-  for (auto& f : kCubeF) {
-    stl += "facet normal 0 0 0\nouter loop\n";
-    for (int k = 0; k < 3; ++k)
-      stl += "vertex " + std::to_string(kCubeV[f[k]][0]) + " " + std::to_string(kCubeV[f[k]][1]) +
-             " " + std::to_string(kCubeV[f[k]][2]) + "\n";
-    stl += "endloop\nendfacet\n";
-  }
-  stl += "endsolid cube\n";
-  for (const auto& [name, text] : {std::pair<std::string, std::string>{"c.obj", cube_obj()},
-                                   {"c.off", off},
-                                   {"c.ply", ply},
-                                   {"c.STL", stl}}) {
-    const SurfaceMesh m = read_mesh(chladni::test::write_temp("chladni_" + name, text), 0.01);
-    EXPECT_EQ(m.triangles.size(), 12u) << name;
-    const MeshReport r = check_mesh(m);
-    EXPECT_TRUE(r.ok()) << name << ": " << message_of(m);
-    EXPECT_NEAR(r.volume, 1e-6, 1e-12) << name;  // 1 cm cube
-  }
-}
-
-TEST(MeshIo, UnitsScaleCoordinates) {
-  EXPECT_DOUBLE_EQ(unit_scale("mm"), 0.001);
-  EXPECT_DOUBLE_EQ(unit_scale("cm"), 0.01);
-  EXPECT_THROW(unit_scale("inch"), InputError);
-  const SurfaceMesh m =
-      read_mesh(chladni::test::write_temp("chladni_cube_u.obj", cube_obj()), unit_scale("mm") * 2);
-  EXPECT_DOUBLE_EQ(m.vertices[6][0], 0.002);
-}
-
-TEST(MeshIo, UnreadableFilesNameTheProblem) {
-  auto msg = [](const std::string& path) {
-    try {
-      read_mesh(path);
-    } catch (const InputError& e) {
-      return std::string(e.what());
-    }
-    return std::string();
-  };
-  EXPECT_NE(msg("/nonexistent/a.obj").find("no such mesh file"), std::string::npos);
-  EXPECT_NE(
-      msg(chladni::test::write_temp("chladni_x.xyz", "1 2 3\n")).find("unsupported mesh format"),
-      std::string::npos);
-  EXPECT_NE(
-      msg(chladni::test::write_temp("chladni_nan.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n"))
-          .find("chladni_nan.obj:3: vertex coordinate"),
-      std::string::npos);
-  EXPECT_NE(
-      msg(chladni::test::write_temp("chladni_bad.obj", "v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n"))
-          .find("chladni_bad.obj:2: 'zero' is not a number"),
-      std::string::npos);
-  EXPECT_FALSE(
-      msg(chladni::test::write_temp("chladni_idx.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"))
-          .empty());
-  EXPECT_FALSE(
-      msg(chladni::test::write_temp("chladni_garbage.off", "OFF\n3 1 0\n0 0 0\nhello\n")).empty());
-  EXPECT_FALSE(msg(chladni::test::write_temp("chladni_empty.obj", "# nothing\n")).empty());
-}
 
 TEST(MeshCheck, BundledMeshesAreValidSolids) {
   for (const char* name : {"bar.obj", "bowl.obj", "rotor.obj", "coupling.obj"}) {

@@ -8,6 +8,7 @@
 
 #include "binary_io.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/input_file.hpp"
 #include "chladni/core/json_reader.hpp"
 
 namespace chladni {
@@ -208,10 +209,8 @@ void write_paper_frames_binary(const std::string& path, const PaperAnimation& an
 }
 
 void read_paper_frames_binary(const std::string& path, PaperAnimation& anim) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open paper frame file " + path);
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)),
-                                   std::istreambuf_iterator<char>());
+  const std::vector<uint8_t> bytes =
+      read_input_file(path, "paper frame file", kMaxBinaryInputBytes);
   if (bytes.size() < sizeof kMagic + 20 || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
     throw InputError(path + ": not a Chladni paper frame file (bad magic)");
   binary_io::Reader tail(bytes.data() + bytes.size() - 4, 4, path);
@@ -226,6 +225,8 @@ void read_paper_frames_binary(const std::string& path, PaperAnimation& anim) {
   if (nv > kMaxVertices || uint64_t(nv) * 3 * nf > kMaxFloats)
     r.fail("implausible counts (" + std::to_string(nv) + " vertices, " + std::to_string(nf) +
            " frames)");
+  r.need_items(uint64_t(nt) * 3, 4, "triangles");
+  r.need_items(uint64_t(nv) * 3 * nf + uint64_t(nt) * 3, 4, "triangles and positions");
   anim.vertex_count = nv;
   anim.triangles.resize(nt);
   r.le_array(anim.triangles.data()->data(), std::size_t(nt) * 3, "triangles");

@@ -12,6 +12,7 @@
 
 #include "binary_io.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/input_file.hpp"
 #include "chladni/core/output_file.hpp"
 
 namespace chladni {
@@ -350,15 +351,7 @@ void write_soundbank(const std::string& path, const Soundbank& bank) {
 }
 
 Soundbank read_soundbank(const std::string& path) {
-  std::ifstream f(path, std::ios::binary | std::ios::ate);
-  if (!f) throw InputError("soundbank " + path + ": cannot open file");
-  const std::streamoff size = f.tellg();
-  if (size < 0) throw InputError("soundbank " + path + ": cannot read file");
-  std::vector<uint8_t> bytes(static_cast<std::size_t>(size));
-  f.seekg(0);
-  f.read(reinterpret_cast<char*>(bytes.data()), size);
-  if (!f) throw InputError("soundbank " + path + ": read failed");
-  return parse_soundbank(bytes, path);
+  return parse_soundbank(read_input_file(path, "soundbank", kMaxBinaryInputBytes), path);
 }
 
 ModalModel to_modal_model(const Soundbank& b, const std::string& name) {

@@ -1,4 +1,4 @@
-// Surface checks and repairs with CGAL Polygon Mesh Processing (one of the two CGAL units).
+// Surface checks and repairs with CGAL Polygon Mesh Processing (the one CGAL unit).
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>

@@ -120,7 +120,12 @@ inline std::string index_path(const std::string& base, std::size_t i) {
   return base + "[" + std::to_string(i) + "]";
 }
 
-/// Parses a JSON file; a syntax error names file:line:column. `what` names the kind of file.
+/// Parses JSON text read from `path`: a syntax error or an overflowing number names
+/// file:line:column, a duplicate key names its JSON path (nlohmann would keep the last).
+json parse_json_text(const std::string& text, const std::string& path);
+
+/// Reads (read_input_file, at most kMaxTextInputBytes) and parses a JSON file. `what` names the
+/// kind of file.
 json read_json_file(const std::string& path, const char* what);
 
 }  // namespace chladni::json_reader
