@@ -176,10 +176,15 @@ void add_bench(CLI::App& app) {
   cmd->add_option("--threads", a->threads, "CPU threads (0: all)")
       ->check(thread_count())
       ->capture_default_str();
-  cmd->add_option("--block", a->block, "Frames per block (latency)")->capture_default_str();
-  cmd->add_option("--batch", a->batch, "Blocks per call for the throughput figure")
+  cmd->add_option("--block", a->block, "Frames per block (latency)")
+      ->check(CLI::Range(1, 16384))
       ->capture_default_str();
-  cmd->add_option("--seconds", a->seconds, "Minimum time per measurement")->capture_default_str();
+  cmd->add_option("--batch", a->batch, "Blocks per call for the throughput figure")
+      ->check(CLI::Range(1, 1024))
+      ->capture_default_str();
+  cmd->add_option("--seconds", a->seconds, "Minimum time per measurement")
+      ->check(finite_above(0, 3600))
+      ->capture_default_str();
   cmd->add_option("--json", a->json_path, "Write the records as JSON to FILE ('-': stdout)");
   cmd->callback([a] { run_bench(*a); });
 }

@@ -225,9 +225,12 @@ void add_paper(CLI::App& app) {
       "paper-gen", "Write a procedural paper animation (slide, shake, flap, crumple or all)");
   gen->add_option("name", g->name, "Scenario: slide, shake, flap, crumple or all")->required();
   gen->add_option("-o,--output", g->dir, "Folder for NAME.json and its frames")->required();
-  gen->add_option("--triangles", g->options.triangles, "Approximate triangle count (800)");
-  gen->add_option("--duration", g->options.duration, "Seconds (default: the scenario's)");
-  gen->add_option("--frame-rate", g->options.frame_rate, "Frames per second (60)");
+  gen->add_option("--triangles", g->options.triangles, "Approximate triangle count (800)")
+      ->check(CLI::Range(8, 2000000));
+  gen->add_option("--duration", g->options.duration, "Seconds (default: the scenario's)")
+      ->check(finite_above(0, 600));
+  gen->add_option("--frame-rate", g->options.frame_rate, "Frames per second (60)")
+      ->check(finite_in(10, 1000));
   gen->add_option("--seed", g->options.seed, "Random seed (crumple)");
   gen->add_flag("--binary", g->binary, "Store frames as one .chpaper file instead of OBJs");
   gen->callback([g] { run_gen(*g); });
@@ -244,15 +247,19 @@ void add_paper(CLI::App& app) {
   cmd->add_option("--paper-mode", a->mode, "database | modal | both (database)");
   cmd->add_option("--backend", a->backend, "Filterbank of the modal voices: cpu | gpu (cpu)");
   cmd->add_option("--listener", a->listener, "Listener position X,Y,Z in metres")
+      ->check(finite_in(-1e6, 1e6))
       ->delimiter(',')
       ->expected(3);
   cmd->add_option("--spectrogram", a->spectrogram, "Also write the sound's spectrogram as PNG");
   cmd->add_option("--seed", a->seed, "Random seed (variants, phases, clicks)");
-  cmd->add_option("--ridge-angle", a->options.ridge_angle, "a_max (rad) of a ridge (0.5)");
+  cmd->add_option("--ridge-angle", a->options.ridge_angle, "a_max (rad) of a ridge (0.5)")
+      ->check(finite_above(0, 3.1416));
   cmd->add_option("--flat-curvature", a->options.flat_curvature,
-                  "Curvature (1/m) below which a face is flat (2)");
+                  "Curvature (1/m) below which a face is flat (2)")
+      ->check(finite_above(0, 1e9));
   cmd->add_option("--crumple-curvature", a->options.crumple_curvature,
-                  "|mean curvature| (1/m) that establishes a sign (1)");
+                  "|mean curvature| (1/m) that establishes a sign (1)")
+      ->check(finite_above(0, 1e9));
   cmd->callback([a] { run_analyze(*a); });
 
   auto* db =
@@ -262,13 +269,18 @@ void add_paper(CLI::App& app) {
   auto* dgen = db->add_subcommand("generate", "Generate the default database from the sheet model");
   dgen->add_option("-o,--output", d->dir, "Database folder to write")->required();
   dgen->add_option("--seed", d->options.seed, "Random seed (1)");
-  dgen->add_option("--variants", d->options.variants, "Clips and spectra per entry (3)");
-  dgen->add_option("--young", d->options.material.young, "Young's modulus of the paper, Pa (4e9)");
+  dgen->add_option("--variants", d->options.variants, "Clips and spectra per entry (3)")
+      ->check(CLI::Range(1, 64));
+  dgen->add_option("--young", d->options.material.young, "Young's modulus of the paper, Pa (4e9)")
+      ->check(finite_above(0, 1e13));
   dgen->add_option("--loss-factor", d->options.material.loss_factor,
-                   "Structural loss factor (0.04)");
-  dgen->add_option("--clip-seconds", d->options.clip_seconds, "Crumple clip length (0.25)");
+                   "Structural loss factor (0.04)")
+      ->check(finite_above(0, 1));
+  dgen->add_option("--clip-seconds", d->options.clip_seconds, "Crumple clip length (0.25)")
+      ->check(finite_above(0, 60));
   dgen->add_option("--friction-seconds", d->friction_seconds,
-                   "Length of each friction recording written (1)");
+                   "Length of each friction recording written (1)")
+      ->check(finite_above(0, 600));
   dgen->add_option("--surfaces", d->options.surfaces, "Friction surface names (wood)");
   dgen->callback([d] { run_db_generate(*d); });
   auto* dinfo = db->add_subcommand("info", "Summarize a database folder");

@@ -209,7 +209,9 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("-o,--output", a->output, "Soundbank to write")->required();
   cmd->add_option("--unit", a->unit, "Unit of the mesh coordinates: m, cm, mm")
       ->capture_default_str();
-  cmd->add_option("--scale", a->scale, "Extra factor on the coordinates")->capture_default_str();
+  cmd->add_option("--scale", a->scale, "Extra factor on the coordinates")
+      ->check(finite_above(0, 1e12))
+      ->capture_default_str();
   cmd->add_option("--material", a->material,
                   "Preset (chladni materials lists them), NAME or NAME:VARIANT")
       ->capture_default_str();
@@ -222,23 +224,29 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("--damping", a->damping,
                   "rayleigh:A1,A2 | caughey:A1,...,AN | power:A1,A2 | hybrid:R1,R2,P1,P2");
   cmd->add_option("--order", a->order, "Element order: 1 (linear) or 2 (quadratic)")
+      ->check(CLI::Range(1, 2))
       ->capture_default_str();
   cmd->add_option("--mass", a->mass, "Mass matrix: consistent or lumped")->capture_default_str();
   cmd->add_option("--max-modes", a->max_modes,
-                  "Compute the first N elastic modes (0: all below --max-freq)");
+                  "Compute the first N elastic modes (0: all below --max-freq)")
+      ->check(CLI::Range(0, 100000));
   cmd->add_option("--max-freq", a->max_freq, "Highest frequency of interest (Hz)")
+      ->check(finite_above(0, 1e6))
       ->capture_default_str();
   cmd->add_option("--sample-rate", a->sample_rate, "Drop modes above its Nyquist frequency (Hz)")
+      ->check(finite_in(8000, 384000))
       ->capture_default_str();
   cmd->add_option("--max-tet-volume", a->max_tet_volume,
                   "Largest tetrahedron (m^3; 0: from --max-freq, or with --max-modes N from "
-                  "the N-th frequency a sizing pass on a coarse mesh finds)");
+                  "the N-th frequency a sizing pass on a coarse mesh finds)")
+      ->check(finite_in(0, 1e6));
   cmd->add_option("--max-memory", a->max_memory_gb,
                   "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "
                   "80 % of the memory available): larger problems are refused before the "
                   "factorization, with what they would need")
       ->check(finite_in(-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()));
   cmd->add_option("--mode-cap", a->mode_cap, "Most modes searched for below --max-freq")
+      ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_option("--eigensolver", a->eigensolver,
                   "block (block Lanczos, default) or spectra (Spectra's Lanczos), same operator")
@@ -247,6 +255,7 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("--save-surface", a->save_surface, "Write the checked (repaired) surface as OBJ");
   cmd->add_option("--max-hole-edges", a->max_hole_edges,
                   "--repair fills holes up to this many edges")
+      ->check(CLI::Range(3, 1000000))
       ->capture_default_str();
   cmd->add_option("--threads", a->threads, "Assembly threads (0: all cores)")
       ->check(thread_count())
@@ -257,9 +266,11 @@ void add_precompute(CLI::App& app) {
                 "Skip acoustic transfer (listener gains then use a compact-source estimate)");
   cmd->add_option("--transfer-order", a->transfer_order,
                   "Multipole order L for every mode (0: per mode from k and the object's size)")
+      ->check(CLI::Range(0, 40))
       ->capture_default_str();
   cmd->add_option("--transfer-max-sources", a->transfer_max_sources,
                   "Most equivalent sources per mode")
+      ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_option(
          "--transfer-method", a->transfer_method,
@@ -271,8 +282,10 @@ void add_precompute(CLI::App& app) {
                   "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")
       ->capture_default_str();
   cmd->add_option("--sound-speed", a->sound_speed, "Speed of sound in air (m/s)")
+      ->check(finite_above(0, 1e5))
       ->capture_default_str();
   cmd->add_option("--air-density", a->air_density, "Density of air (kg/m^3)")
+      ->check(finite_above(0, 1e5))
       ->capture_default_str();
   cmd->callback([a] { run_precompute(*a); });
 }

@@ -13,6 +13,7 @@
 
 #include "backend.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/number_table.hpp"
 #include "chladni/core/output_file.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/core/transfer.hpp"
@@ -32,37 +33,6 @@ struct RadiateArgs {
   double freq = 0, scale = 1, sound_speed = 343.0, air_density = 1.204;
   int order = 0;
 };
-
-// Numbers per non-empty, non-comment line; errors name file and line.
-std::vector<std::vector<double>> read_rows(const std::string& path, std::size_t min_cols,
-                                           std::size_t max_cols, const char* what) {
-  std::ifstream in(path);
-  if (!in) throw InputError("cannot open " + std::string(what) + " file " + path);
-  std::vector<std::vector<double>> rows;
-  std::string line;
-  for (std::size_t n = 1; std::getline(in, line); ++n) {
-    if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
-    std::istringstream ss(line);
-    std::vector<double> row;
-    std::string tok;
-    while (ss >> tok) {
-      char* end = nullptr;
-      const double v = std::strtod(tok.c_str(), &end);
-      if (end == tok.c_str() || *end != '\0' || !std::isfinite(v))
-        throw InputError(path + ":" + std::to_string(n) + ": '" + tok + "' is not a finite number");
-      row.push_back(v);
-    }
-    if (row.empty()) continue;
-    if (row.size() < min_cols || row.size() > max_cols)
-      throw InputError(path + ":" + std::to_string(n) + ": expected " +
-                       (min_cols == max_cols
-                            ? std::to_string(min_cols)
-                            : std::to_string(min_cols) + " or " + std::to_string(max_cols)) +
-                       " numbers, found " + std::to_string(row.size()));
-    rows.push_back(std::move(row));
-  }
-  return rows;
-}
 
 // "sphere-harmonic:l=2,m=0[,U=1]" or "uniform[:U=1]": values per vertex about the centroid.
 std::vector<cd> pattern_velocity(const std::string& spec, const precompute::SurfaceMesh& mesh) {
@@ -130,14 +100,14 @@ void run_radiate(const RadiateArgs& a) {
   if (!a.pattern.empty()) {
     un = pattern_velocity(a.pattern, mesh);
   } else {
-    for (const auto& row : read_rows(a.velocity, 1, 2, "velocity"))
+    for (const auto& row : read_number_rows(a.velocity, 1, 2, "velocity file"))
       un.emplace_back(row[0], row.size() > 1 ? row[1] : 0.0);
     if (un.size() != mesh.vertices.size())
       throw InputError(a.velocity + ": " + std::to_string(un.size()) + " velocity values, but " +
                        a.mesh + " has " + std::to_string(mesh.vertices.size()) + " vertices");
   }
   std::vector<Vec3> pts;
-  for (const auto& row : read_rows(a.points, 3, 3, "points"))
+  for (const auto& row : read_number_rows(a.points, 3, 3, "points file"))
     pts.push_back({row[0], row[1], row[2]});
   if (pts.empty()) throw InputError(a.points + ": no points");
 
@@ -236,7 +206,7 @@ void add_radiate(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "radiate", "Pressure radiated by a closed surface for a prescribed normal velocity");
   cmd->add_option("mesh", a->mesh, "Closed triangle mesh (OBJ/OFF/PLY/STL)")->required();
-  cmd->add_option("--freq", a->freq, "Frequency (Hz)")->required();
+  cmd->add_option("--freq", a->freq, "Frequency (Hz)")->check(finite_above(0, 1e6))->required();
   cmd->add_option("--velocity", a->velocity,
                   "Outward normal velocity per vertex, one line each: 're' or 're im' (m/s)");
   cmd->add_option("--pattern", a->pattern,
@@ -255,12 +225,20 @@ void add_radiate(CLI::App& app) {
                   "Evaluate directly from the surface solution (surface; 'sources' is its old "
                   "name), or by the stored multipole series (multipole, r >= R)")
       ->capture_default_str();
-  cmd->add_option("--order", a->order, "Multipole order (0: automatic)")->capture_default_str();
+  cmd->add_option("--order", a->order, "Multipole order (0: automatic)")
+      ->check(CLI::Range(0, 40))
+      ->capture_default_str();
   cmd->add_option("--unit", a->unit, "Unit of the mesh coordinates: m, cm, mm")
       ->capture_default_str();
-  cmd->add_option("--scale", a->scale, "Extra factor on the coordinates")->capture_default_str();
-  cmd->add_option("--sound-speed", a->sound_speed, "m/s")->capture_default_str();
-  cmd->add_option("--air-density", a->air_density, "kg/m^3")->capture_default_str();
+  cmd->add_option("--scale", a->scale, "Extra factor on the coordinates")
+      ->check(finite_above(0, 1e12))
+      ->capture_default_str();
+  cmd->add_option("--sound-speed", a->sound_speed, "m/s")
+      ->check(finite_above(0, 1e5))
+      ->capture_default_str();
+  cmd->add_option("--air-density", a->air_density, "kg/m^3")
+      ->check(finite_above(0, 1e5))
+      ->capture_default_str();
   cmd->add_option("--json", a->json_path, "Write the fit and the pressures as JSON");
   cmd->callback([a] { run_radiate(*a); });
 }

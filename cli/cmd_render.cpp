@@ -43,7 +43,12 @@ void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>
         if (!quiet) std::printf("  %-12s %zu inline modes\n", obj.name.c_str(), obj.modes.size());
         break;
       case SceneObject::Source::Bar: {
-        auto model = std::make_unique<ModalModel>(precompute::analytic_bar(obj.bar));
+        std::unique_ptr<ModalModel> model;
+        try {
+          model = std::make_unique<ModalModel>(precompute::analytic_bar(obj.bar));
+        } catch (const InputError& e) {
+          throw InputError(obj.json_path + ".bar: " + e.what());
+        }
         model->name = obj.name;
         const ModeSelection sel =
             apply_damping(*model, obj.bar.damping, 20.0, obj.bar.max_frequency, scene.sample_rate);
@@ -90,18 +95,7 @@ void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>
   }
 }
 
-void run_render(const RenderArgs& a) {
-  check_output_path(a.output, "output");
-  Scene scene = load_scene(a.scene);
-  if (a.sample_rate) {
-    if (a.sample_rate < 8000 || a.sample_rate > 384000) {
-      throw InputError("--sample-rate must lie in [8000, 384000]");
-    }
-    scene.sample_rate = a.sample_rate;
-  }
-  if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
-  const SampleFormat format = parse_sample_format(a.format);
-
+void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
   if (!a.quiet)
     std::printf("scene %s: %zu objects, %zu impacts, %zu moves, %zu shakes\n", a.scene.c_str(),
                 scene.objects.size(), scene.events.size(), scene.moves.size(), scene.shakes.size());
@@ -172,6 +166,21 @@ void run_render(const RenderArgs& a) {
   }
 }
 
+void run_render(const RenderArgs& a) {
+  check_output_path(a.output, "output");
+  if (a.sample_rate && (a.sample_rate < 8000 || a.sample_rate > 384000))
+    throw InputError("--sample-rate must lie in [8000, 384000]");
+  if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
+  const SampleFormat format = parse_sample_format(a.format);
+  Scene scene = load_scene(a.scene);
+  if (a.sample_rate) scene.sample_rate = a.sample_rate;
+  try {
+    render_loaded(a, scene, format);
+  } catch (const InputError& e) {
+    throw naming_file(a.scene, e);
+  }
+}
+
 }  // namespace
 
 void add_render(CLI::App& app) {
@@ -181,15 +190,20 @@ void add_render(CLI::App& app) {
   cmd->add_option("-o,--output", a->output, "Output WAV file")->required();
   cmd->add_option("--backend", a->backend, "Filterbank: cpu or gpu (gpu falls back to cpu)")
       ->capture_default_str();
-  cmd->add_option("--sample-rate", a->sample_rate, "Override the scene's sample rate (Hz)");
-  cmd->add_option("--block", a->block, "Frames per filterbank call")->capture_default_str();
+  cmd->add_option("--sample-rate", a->sample_rate, "Override the scene's sample rate (Hz)")
+      ->check(CLI::Range(8000, 384000));
+  cmd->add_option("--block", a->block, "Frames per filterbank call")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
   cmd->add_option("--threads", a->threads, "CPU threads (0: all)")
       ->check(thread_count())
       ->capture_default_str();
   cmd->add_option("--isa", a->isa, "CPU instruction set: auto, scalar, avx2, avx512")
       ->capture_default_str();
-  cmd->add_option("--max-modes", a->max_modes, "Resident mode budget (0: all modes of the scene)");
+  cmd->add_option("--max-modes", a->max_modes, "Resident mode budget (0: all modes of the scene)")
+      ->check(CLI::Range(0, 1 << 24));
   cmd->add_option("--retire-db", a->retire_db, "Retire modes this far below their peak (dB)")
+      ->check(finite_in(-400, 0))
       ->capture_default_str();
   cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)")
       ->check(finite_in(-120, 0));

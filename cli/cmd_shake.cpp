@@ -185,18 +185,27 @@ void add_shake(CLI::App& app) {
   cmd->add_option("instrument", a->instrument, "Instrument (--list shows them)");
   cmd->add_option("-o,--output", a->output, "Output WAV file");
   cmd->add_flag("--list", a->list, "List the instruments and their sources");
-  cmd->add_option("--duration", a->duration, "Seconds of sound")->capture_default_str();
-  cmd->add_option("--shakes-per-second", a->rate, "Shakes per second and voice")
+  cmd->add_option("--duration", a->duration, "Seconds of sound")
+      ->check(finite_above(0, 3600))
       ->capture_default_str();
-  cmd->add_option("--energy", a->energy, "Energy each shake adds (0-1]")->capture_default_str();
-  cmd->add_option("--particles", a->particles, "Particle count (0: the instrument's)");
+  cmd->add_option("--shakes-per-second", a->rate, "Shakes per second and voice")
+      ->check(finite_above(0, 1000))
+      ->capture_default_str();
+  cmd->add_option("--energy", a->energy, "Energy each shake adds (0-1]")
+      ->check(finite_above(0, 1))
+      ->capture_default_str();
+  cmd->add_option("--particles", a->particles, "Particle count (0: the instrument's)")
+      ->check(finite_in(0, 1e6));
   cmd->add_option("--voices", a->voices, "Simultaneous voices (stereo when > 1)")
+      ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   cmd->add_option("--bank", a->bank,
                   "Soundbank whose modes resonate (particles strike random surface points)");
   cmd->add_option("--contacts", a->contacts, "Surface points a bank voice's shakes move between")
+      ->check(CLI::Range(1, 4096))
       ->capture_default_str();
   cmd->add_option("--impulse", a->impulse, "N*s per unit of excitation on a bank's object")
+      ->check(finite_above(0, 1e3))
       ->capture_default_str();
   cmd->add_option("--listener", a->listener, "Listener X,Y,Z (m, object frame) for --bank")
       ->capture_default_str();
@@ -207,8 +216,12 @@ void add_shake(CLI::App& app) {
   cmd->add_option("--threads", a->threads, "CPU threads (0: all)")
       ->check(thread_count())
       ->capture_default_str();
-  cmd->add_option("--sample-rate", a->sample_rate, "Hz")->capture_default_str();
-  cmd->add_option("--block", a->block, "Frames per filterbank call")->capture_default_str();
+  cmd->add_option("--sample-rate", a->sample_rate, "Hz")
+      ->check(CLI::Range(8000, 384000))
+      ->capture_default_str();
+  cmd->add_option("--block", a->block, "Frames per filterbank call")
+      ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
   cmd->add_option("--normalize", a->normalize_db, "Scale so the peak is at this level (dBFS)")
       ->check(finite_in(-120, 0));
   cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")

@@ -5,11 +5,14 @@
 
 namespace chladni::cli {
 
-/// A number that must be finite and lie in [lo, hi] (CLI::Range lets NaN and infinities of the
-/// wrong sign through).
-inline CLI::Validator finite_in(double lo, double hi) {
+namespace detail {
+// A finite number in [lo, hi], or in (lo, hi] when open_low (CLI::Range lets NaN and infinities
+// of the wrong sign through).
+inline CLI::Validator finite_range(double lo, double hi, bool open_low) {
+  const std::string range =
+      (open_low ? "(" : "[") + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]";
   return CLI::Validator(
-      [lo, hi](std::string& text) -> std::string {
+      [lo, hi, open_low, range](std::string& text) -> std::string {
         double v = 0;
         std::size_t used = 0;
         try {
@@ -18,12 +21,22 @@ inline CLI::Validator finite_in(double lo, double hi) {
           used = 0;
         }
         if (used != text.size() || text.empty()) return "not a number: '" + text + "'";
-        if (!std::isfinite(v) || v < lo || v > hi)
-          return "must be a finite number in [" + CLI::detail::to_string(lo) + ", " +
-                 CLI::detail::to_string(hi) + "], not " + text;
+        if (!std::isfinite(v) || v < lo || (open_low && v == lo) || v > hi)
+          return "must be a finite number in " + range + ", not " + text;
         return {};
       },
-      "NUMBER in [" + CLI::detail::to_string(lo) + ", " + CLI::detail::to_string(hi) + "]");
+      "NUMBER in " + range);
+}
+}  // namespace detail
+
+/// Every numeric option is bounded where it is declared, so its help shows the limits
+/// (docs/robustness.md lists them): a finite number in [lo, hi] ...
+inline CLI::Validator finite_in(double lo, double hi) {
+  return detail::finite_range(lo, hi, false);
+}
+/// ... or in (lo, hi].
+inline CLI::Validator finite_above(double lo, double hi) {
+  return detail::finite_range(lo, hi, true);
 }
 
 /// Worker threads: 0 (all cores) up to 1024.

@@ -201,3 +201,23 @@ TEST(ModalFem, BlockLanczosAndSpectraAgree) {
     EXPECT_NEAR(std::abs(dot) / std::sqrt(nb * ns), 1.0, 1e-5) << "mode " << i;
   }
 }
+
+// A box given as 12 triangles must get the elements the volume bound asks for (TetGen alone,
+// keeping the surface, would leave it 12 tetrahedra), and so the same modes as the same box
+// given with a fine surface.
+TEST(ModalFem, CoarseSurfaceBoxMatchesFineSurfaceBox) {
+  const Vec3 size{0.3, 0.18, 0.12};
+  PrecomputeOptions o;
+  o.max_modes = 8;
+  o.transfer = false;
+  PrecomputeReport coarse_r, fine_r;
+  const Soundbank coarse =
+      precompute_surface(test::box_surface(size, {1, 1, 1}), "coarse box", o, coarse_r);
+  const Soundbank fine =
+      precompute_surface(test::box_surface(size, {10, 6, 4}), "fine box", o, fine_r);
+  EXPECT_GT(coarse.triangles.size(), 12u);  // the surface was split for the elements
+  ASSERT_EQ(coarse.omega.size(), 8u);
+  ASSERT_EQ(fine.omega.size(), 8u);
+  for (std::size_t i = 0; i < 8; ++i)
+    EXPECT_NEAR(coarse.omega[i] / fine.omega[i], 1.0, 0.01) << "mode " << i;
+}

@@ -141,13 +141,17 @@ bool PaperAnimation::anchored(std::uint32_t v, std::uint32_t f) const {
 }
 
 void validate(const PaperAnimation& anim, const std::string& where) {
-  if (!(anim.frame_rate > 0) || !std::isfinite(anim.frame_rate))
-    throw InputError(where + ": frame_rate must be finite and > 0");
+  // Each frame becomes fs / frame_rate samples, and the sound is held in memory.
+  if (!(anim.frame_rate >= 1 && anim.frame_rate <= 10000))
+    throw InputError(where + ": frame_rate must lie in [1, 10000] frames/s");
   if (anim.vertex_count < 3 || anim.triangles.empty())
     throw InputError(where + ": the sheet needs at least one triangle");
   if (anim.positions.size() % (3 * std::size_t(anim.vertex_count)) != 0)
     throw InputError(where + ": position count is not a whole number of frames");
   if (anim.frame_count() < 2) throw InputError(where + ": an animation needs at least 2 frames");
+  if (anim.duration() > 3600)
+    throw InputError(where + ": " + std::to_string(anim.frame_count()) + " frames at " +
+                     std::to_string(anim.frame_rate) + " frames/s last more than an hour");
   for (std::size_t t = 0; t < anim.triangles.size(); ++t) {
     const auto& tri = anim.triangles[t];
     for (uint32_t v : tri) {

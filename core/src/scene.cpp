@@ -20,6 +20,16 @@ using json_reader::Obj;
 using json_reader::read_json_file;
 using nlohmann::json;
 
+// A render holds its whole output in memory, so a scene lasts at most an hour.
+constexpr double kMaxSceneSeconds = 3600;
+
+double event_time(Obj& o) {
+  const double t = o.number("time");
+  if (t < 0 || t > kMaxSceneSeconds)
+    fail(o.at("time"), "must lie in [0, 3600] s (a scene lasts at most an hour)");
+  return t;
+}
+
 void parse_bar(Obj o, BarSpec& bar) {
   bar.length = o.positive("length", bar.length);
   bar.width = o.positive("width", bar.width);
@@ -90,8 +100,7 @@ MoveEvent parse_move(Obj o, const Scene& scene, bool listener) {
   MoveEvent ev;
   ev.json_path = o.path();
   o.string("type");
-  ev.time = o.number("time");
-  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
+  ev.time = event_time(o);
   if (o.has("position")) ev.position = o.vec3("position");
   if (listener) {
     if (o.has("forward")) ev.forward = o.unit("forward");
@@ -114,8 +123,7 @@ Event event_on_object(Obj& o, const Scene& scene) {
   Event ev;
   ev.json_path = o.path();
   o.string("type");
-  ev.time = o.number("time");
-  if (ev.time < 0) fail(o.at("time"), "must be >= 0");
+  ev.time = event_time(o);
   ev.object = find_object(o, scene);
   return ev;
 }
@@ -186,8 +194,8 @@ Scene parse_scene(const json& j, const std::string& base_dir) {
   }
   if (root.has("duration")) {
     s.duration = root.number("duration");
-    if (!(*s.duration > 0) || *s.duration > 3600)
-      fail(root.at("duration"), "must lie in (0, 3600]");
+    if (!(*s.duration > 0) || *s.duration > kMaxSceneSeconds)
+      fail(root.at("duration"), "must lie in (0, 3600] s");
   }
   s.gain = root.non_negative("gain", 1.0);
   if (root.has("listener")) {

@@ -64,6 +64,15 @@ ModalModel analytic_bar(const BarSpec& bar, int stations) {
     int n;
   };
   std::vector<Mode> modes;
+  // A long or slender bar can have millions of modes below wmax; refuse before making them.
+  constexpr std::size_t kMaxModes = 100000;
+  const auto add = [&](const Mode& md) {
+    if (modes.size() == kMaxModes)
+      throw InputError("analytic bar: more than " + std::to_string(kMaxModes) + " modes below " +
+                       std::to_string(int(bar.max_frequency)) +
+                       " Hz (shorten the bar or lower max_frequency)");
+    modes.push_back(md);
+  };
   // Bending: omega = (beta_n)^2 sqrt(E I / (rho A)), I = b h^3 / 12 (z) or h b^3 / 12 (y).
   const double Iz = b * h * h * h / 12, Iy = h * b * b * b / 12;
   for (int kind = 0; kind < 2; ++kind) {
@@ -72,14 +81,14 @@ ModalModel analytic_bar(const BarSpec& bar, int stations) {
       const double beta = free_free_beta_l(n) / L;
       const double w = beta * beta * c;
       if (w > wmax) break;
-      modes.push_back({w, kind, n});
+      add({w, kind, n});
     }
   }
   // Axial: omega = n pi / L sqrt(E / rho).
   for (int n = 1;; ++n) {
     const double w = n * std::numbers::pi / L * std::sqrt(E / rho);
     if (w > wmax) break;
-    modes.push_back({w, 2, n});
+    add({w, 2, n});
   }
   std::sort(modes.begin(), modes.end(),
             [](const Mode& a, const Mode& b) { return a.omega < b.omega; });

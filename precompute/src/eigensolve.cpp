@@ -19,6 +19,7 @@
 
 #include "chladni/core/error.hpp"
 #include "cholmod_factor.hpp"  // FactorEstimate in every build; CholmodFactor with CHOLMOD
+#include "eigensolve_dense.hpp"
 #include "timing.hpp"
 
 namespace chladni::precompute {
@@ -249,36 +250,15 @@ std::string gigabytes(double bytes) {
   return buf;
 }
 
-}  // namespace
-
-double default_memory_budget() {
-  // MemAvailable counts what can be had without swapping (free plus reclaimable caches).
-  std::ifstream in("/proc/meminfo");
-  for (std::string line; std::getline(in, line);) {
-    double kb = 0;
-    if (std::sscanf(line.c_str(), "MemAvailable: %lf kB", &kb) == 1) return 0.8 * kb * 1024.0;
-  }
-  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && size > 0 ? 0.8 * double(pages) * double(size) : 0.0;
-}
-
-std::string factorization_name() {
-  return kFactorName;
-}
-
-EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eigen::MatrixXd& rigid,
-                        const EigenOptions& o,
-                        const std::function<void(const std::string&)>& status) {
+// Shift-invert Lanczos over the sparse factor: the lowest eigenpairs of K v = lambda M v, as
+// many as o.modes asks (plus the six rigid ones) or all below o.max_frequency.
+void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOptions& o,
+                     const std::function<void(const std::string&)>& status, EigenResult& r,
+                     Eigen::VectorXd& evals, Eigen::MatrixXd& evecs) {
   const Eigen::Index n = K.rows();
-  if (n != M.rows() || rigid.rows() != n || rigid.cols() != 6)
-    throw InternalError("solve_modes: K, M and the rigid modes differ in size");
-  if (!(o.max_frequency > 0) || !(o.shift_hz > 0))
-    throw InputError("max frequency and shift must be > 0");
   const double two_pi = 2 * std::numbers::pi;
   double sigma = -std::pow(two_pi * o.shift_hz, 2);
   const double lambda_max = std::pow(two_pi * o.max_frequency, 2);
-
-  EigenResult r;
   r.factorization = kFactorName;
   auto t0 = std::chrono::steady_clock::now();
   SplitShiftInvert op(K, M);
@@ -328,16 +308,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   r.shift = sigma;
   r.factor_seconds = seconds_since(t0);
 
-  // M-orthonormal basis of the rigid motions: Q = R L^-T with L L^T = R^T M R.
-  const Eigen::MatrixXd MR = M * rigid;
-  const Eigen::MatrixXd G = rigid.transpose() * MR;
-  const Eigen::LLT<Eigen::MatrixXd> llt(G);
-  if (llt.info() != Eigen::Success) throw InternalError("rigid-body motions are degenerate");
-  const Eigen::MatrixXd MQ = llt.matrixL().solve(MR.transpose()).transpose();  // M Q
-
   t0 = std::chrono::steady_clock::now();
-  Eigen::VectorXd evals;
-  Eigen::MatrixXd evecs;
   if (o.method == EigenOptions::Method::BlockLanczos) {
     const double theta_min = 1.0 / (lambda_max - sigma);
     const BlockLanczosResult bl =
@@ -385,9 +356,59 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   r.lanczos_seconds = seconds_since(t0);
   r.solve_seconds = op.solve_seconds;
 
-  // Back to the original problem in one multi-right-hand-side solve, M-normalize, and classify
-  // rigid modes by their M-weighted overlap with the rigid motions.
+  // Back to the original problem in one multi-right-hand-side solve.
   op.to_modes(evecs);
+}
+
+}  // namespace
+
+double default_memory_budget() {
+  // MemAvailable counts what can be had without swapping (free plus reclaimable caches).
+  std::ifstream in("/proc/meminfo");
+  for (std::string line; std::getline(in, line);) {
+    double kb = 0;
+    if (std::sscanf(line.c_str(), "MemAvailable: %lf kB", &kb) == 1) return 0.8 * kb * 1024.0;
+  }
+  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
+  return pages > 0 && size > 0 ? 0.8 * double(pages) * double(size) : 0.0;
+}
+
+std::string factorization_name() {
+  return kFactorName;
+}
+
+EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eigen::MatrixXd& rigid,
+                        const EigenOptions& o,
+                        const std::function<void(const std::string&)>& status) {
+  const Eigen::Index n = K.rows();
+  if (n != M.rows() || rigid.rows() != n || rigid.cols() != 6)
+    throw InternalError("solve_modes: K, M and the rigid modes differ in size");
+  if (!(o.max_frequency > 0) || !(o.shift_hz > 0))
+    throw InputError("max frequency and shift must be > 0");
+  const double two_pi = 2 * std::numbers::pi;
+  const double lambda_max = std::pow(two_pi * o.max_frequency, 2);
+
+  EigenResult r;
+  Eigen::VectorXd evals;
+  Eigen::MatrixXd evecs;
+  if (n <= kDenseDofs) {
+    const auto t0 = std::chrono::steady_clock::now();
+    dense_modes(K, M, evals, evecs);
+    r.factorization = "dense (Eigen, all modes)";
+    r.solves = 1;
+    r.lanczos_seconds = seconds_since(t0);
+  } else {
+    iterative_modes(K, M, o, status, r, evals, evecs);
+  }
+
+  // M-orthonormal basis of the rigid motions: Q = R L^-T with L L^T = R^T M R.
+  const Eigen::MatrixXd MR = M * rigid;
+  const Eigen::MatrixXd G = rigid.transpose() * MR;
+  const Eigen::LLT<Eigen::MatrixXd> llt(G);
+  if (llt.info() != Eigen::Success) throw InternalError("rigid-body motions are degenerate");
+  const Eigen::MatrixXd MQ = llt.matrixL().solve(MR.transpose()).transpose();  // M Q
+
+  // M-normalize, and classify rigid modes by their M-weighted overlap with the rigid motions.
   Eigen::MatrixXd Mv = parallel_product(M, evecs);
   std::vector<Eigen::Index> elastic;
   for (Eigen::Index j = 0; j < evals.size(); ++j) {
@@ -417,8 +438,18 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   for (Eigen::Index j : elastic) {
     if (o.modes == 0 && evals(j) > lambda_max) break;
     if (o.modes > 0 && r.lambda.size() == o.modes) break;
+    if (o.modes == 0 && r.lambda.size() == o.mode_cap) {
+      r.capped = true;
+      break;
+    }
     r.lambda.push_back(evals(j));
   }
+  if (o.modes > 0 && r.lambda.size() < o.modes)
+    throw InputError("asked for " + std::to_string(o.modes) + " modes, but the mesh (" +
+                     std::to_string(n) + " degrees of freedom) has only " +
+                     std::to_string(r.lambda.size()) +
+                     " elastic modes: ask for fewer (--max-modes) or use smaller elements "
+                     "(--max-tet-volume)");
   r.vectors.resize(n, Eigen::Index(r.lambda.size()));
   Eigen::MatrixXd Mk(n, r.vectors.cols());
   for (std::size_t i = 0; i < r.lambda.size(); ++i) {

@@ -12,6 +12,14 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// `e` with `file` named first (a problem found in what `file` asks for, such as a scene's
+/// event), unless its message already starts with it.
+inline InputError naming_file(const std::string& file, const InputError& e) {
+  const std::string msg = e.what();
+  if (msg.rfind(file, 0) == 0) return e;
+  return InputError(file + ": " + msg);
+}
+
 /// A failure of ours or of the system (driver, out of memory) rather than of the input.
 class InternalError : public std::runtime_error {
  public:
