@@ -181,7 +181,6 @@ struct DbArgs {
 };
 
 void run_db_generate(const DbArgs& a) {
-  if (!(a.friction_seconds > 0.1)) throw InputError("--friction-seconds must be > 0.1");
   const auto t = std::chrono::steady_clock::now();
   ProgressBar progress(false);
   progress.stage("sheet modes, clips and spectra");
@@ -270,17 +269,17 @@ void add_paper(CLI::App& app) {
   dgen->add_option("-o,--output", d->dir, "Database folder to write")->required();
   dgen->add_option("--seed", d->options.seed, "Random seed (1)");
   dgen->add_option("--variants", d->options.variants, "Clips and spectra per entry (3)")
-      ->check(CLI::Range(1, 64));
+      ->check(CLI::Range(1, 16));
   dgen->add_option("--young", d->options.material.young, "Young's modulus of the paper, Pa (4e9)")
-      ->check(finite_above(0, 1e13));
+      ->check(finite_in(1e8, 1e11));
   dgen->add_option("--loss-factor", d->options.material.loss_factor,
                    "Structural loss factor (0.04)")
       ->check(finite_above(0, 1));
   dgen->add_option("--clip-seconds", d->options.clip_seconds, "Crumple clip length (0.25)")
-      ->check(finite_above(0, 60));
+      ->check(finite_above(0, 2));
   dgen->add_option("--friction-seconds", d->friction_seconds,
                    "Length of each friction recording written (1)")
-      ->check(finite_above(0, 600));
+      ->check(finite_above(0.1, 30));
   dgen->add_option("--surfaces", d->options.surfaces, "Friction surface names (wood)");
   dgen->callback([d] { run_db_generate(*d); });
   auto* dinfo = db->add_subcommand("info", "Summarize a database folder");

@@ -116,6 +116,13 @@ void run_radiate(const RadiateArgs& a) {
   o.air_density = a.air_density;
   o.order = a.order;
   const precompute::RadiatingSurface surf(mesh, o);
+  // Past a few hundred wavelengths across, no method here resolves the field (BEM elements,
+  // sources and multipole orders are all capped): refuse rather than print a wrong field.
+  const double kR = 2 * std::numbers::pi * a.freq / a.sound_speed * surf.radius();
+  if (!(kR <= 1000))
+    throw InputError(a.mesh + ": k R = " + std::to_string(kR) + " at --freq " +
+                     std::to_string(a.freq) +
+                     " Hz: the surface is too many wavelengths across (at most k R = 1000)");
   std::shared_ptr<gpu::Context> ctx = a.backend == "gpu" ? transfer_device("gpu") : nullptr;
   if (a.backend != "gpu" && a.backend != "cpu") throw InputError("--backend must be cpu or gpu");
   std::unique_ptr<precompute::TransferKernels> kernels =

@@ -6,8 +6,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/deps.sh
 jobs=$(nproc)
-cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DCHLADNI_BUILD_TESTS=OFF \
-  -DCHLADNI_BUILD_BENCH=OFF
+bash scripts/configure.sh demo build/release
 cmake --build build/release --target chladni -j "$jobs"
 chladni=./build/release/cli/chladni
 mkdir -p out

@@ -9,7 +9,7 @@ PACKAGES=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev libsndfile1-dev
   libgtest-dev libgmock-dev libbenchmark-dev libstk-dev
   zlib1g-dev libfftw3-dev libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
-  clang-format
+  clang-format clang libclang-rt-14-dev llvm
 )
 
 missing=()

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs dependencies, builds Chladni twice (optimised, and Debug with AddressSanitizer +
-# UndefinedBehaviorSanitizer + Vulkan validation layers) and runs the whole test suite in each.
+# UndefinedBehaviorSanitizer + Vulkan validation layers) and runs the whole test suite in each,
+# then fuzzes every file reader for a bounded time (scripts/fuzz.sh, clang + libFuzzer).
 # The GPU tests run on whatever Vulkan device is present; in CI that is Mesa lavapipe.
 # Usage: bash scripts/test.sh            (from the repository root, as root on Debian 12)
 set -euo pipefail
@@ -9,16 +10,14 @@ bash scripts/deps.sh
 jobs=$(nproc)
 
 echo "== release build and tests"
-# Tests and benchmarks are named explicitly: the demo configures the same folder without them,
-# and a cached OFF must not turn this into a run of no tests.
-cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DCHLADNI_BUILD_TESTS=ON \
-  -DCHLADNI_BUILD_BENCH=ON
+# configure.sh names tests and benchmarks explicitly: the demo configures the same folder without
+# them, and a cached OFF must not turn this into a run of no tests (--no-tests=error).
+bash scripts/configure.sh tests build/release
 cmake --build build/release -j "$jobs"
 ctest --test-dir build/release --output-on-failure --no-tests=error -j "$jobs"
 
 echo "== sanitizer build (ASan + UBSan, Debug, Vulkan validation) and tests"
-cmake -S . -B build/asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCHLADNI_SANITIZE=ON \
-  -DCHLADNI_BUILD_TESTS=ON -DCHLADNI_BUILD_BENCH=OFF "-DCMAKE_CXX_FLAGS_DEBUG=-g -O1"
+bash scripts/configure.sh asan build/asan
 cmake --build build/asan -j "$jobs"
 # Lavapipe leaks a little per VkInstance and is dlclose'd before LeakSanitizer reports, which
 # leaves the leak unattributable; preloading it (after libasan, which must come first) keeps it
@@ -31,3 +30,6 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --output-on-failure --no-tests=error -j "$jobs"
+
+echo "== fuzzing every reader for ${CHLADNI_FUZZ_SECONDS:-20} s each (scripts/fuzz.sh)"
+bash scripts/fuzz.sh "${CHLADNI_FUZZ_SECONDS:-20}"

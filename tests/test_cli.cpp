@@ -10,24 +10,15 @@
 #include <nlohmann/json.hpp>
 
 #include "chladni/core/audio_file.hpp"
+#include "cli_support.hpp"
 #include "test_support.hpp"
 
 namespace {
 
-struct Result {
-  int code;
-  std::string output;
-};
+using Result = chladni::test::CliResult;
 
-// Runs chladni with `args`; `env` is prepended as VAR=value assignments.
 Result run(const std::string& args, const std::string& env = "") {
-  const std::string cmd = env + " " + std::string(CHLADNI_EXE) + " " + args + " 2>&1";
-  FILE* p = popen(cmd.c_str(), "r");
-  std::string out;
-  char buf[4096];
-  while (std::size_t n = std::fread(buf, 1, sizeof(buf), p)) out.append(buf, n);
-  const int status = pclose(p);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+  return chladni::test::run_cli(args, env);
 }
 
 }  // namespace

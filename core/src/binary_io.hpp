@@ -54,6 +54,7 @@ class Reader {
   template <class T>
   void le_array(T* out, std::size_t n, const char* what) {
     need_items(n, sizeof(T), what);
+    if (n == 0) return;  // out may be null (an empty vector's data())
     if constexpr (std::endian::native == std::endian::little) {
       std::memcpy(out, p_ + pos_, n * sizeof(T));
       pos_ += n * sizeof(T);

@@ -233,7 +233,7 @@ void read_paper_frames_binary(const std::string& path, PaperAnimation& anim) {
   r.need_items(uint64_t(nv) * 3 * nf + uint64_t(nt) * 3, 4, "triangles and positions");
   anim.vertex_count = nv;
   anim.triangles.resize(nt);
-  r.le_array(anim.triangles.data()->data(), std::size_t(nt) * 3, "triangles");
+  r.le_array(reinterpret_cast<uint32_t*>(anim.triangles.data()), std::size_t(nt) * 3, "triangles");
   anim.positions.resize(std::size_t(nv) * 3 * nf);
   r.le_array(anim.positions.data(), anim.positions.size(), "positions");
   r.expect_end();

@@ -287,9 +287,10 @@ struct SourceFitter {
     const double terms = (k * s.radius_ + 3.0) * (k * s.radius_ + 3.0);
     const double wanted =
         std::max(o.sources_per_term * terms, s.area_ / (s.typical_depth_ * s.typical_depth_));
-    const std::size_t ns =
-        std::clamp<std::size_t>(static_cast<std::size_t>(std::ceil(wanted)), o.min_sources,
-                                std::min(o.max_sources, s.anchors_.size()));
+    // In double: a huge kR must not overflow; never more sources than anchor vertices.
+    const double most = double(std::min(o.max_sources, s.anchors_.size()));
+    const auto ns = static_cast<std::size_t>(
+        std::min(std::max(std::ceil(wanted), double(o.min_sources)), most));
     const double spacing = std::sqrt(s.area_ / double(ns));
     for (std::size_t i = 0; i < ns; ++i) {
       const uint32_t v = s.anchors_[i];

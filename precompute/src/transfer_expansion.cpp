@@ -32,7 +32,8 @@ std::vector<Vec3> fibonacci_sphere(std::size_t n, double radius) {
 int expansion_order(double k, double radius, const AcousticOptions& o) {
   if (o.order > 0) return o.order;
   const double kr = k * radius;
-  return std::min(static_cast<int>(std::ceil(kr + 2.0 * std::cbrt(kr))) + 8, o.max_order);
+  // In double first: a huge kR (a typo in --freq or --scale) must not overflow the int.
+  return static_cast<int>(std::min(std::ceil(kr + 2.0 * std::cbrt(kr)) + 8, double(o.max_order)));
 }
 
 ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fit,

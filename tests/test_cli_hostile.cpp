@@ -1,0 +1,128 @@
+// Every numeric option of every command, found in the command's own --help, given hostile
+// values (NaN, infinities, zero, negative, tiny, huge, past 2^32) on top of a quick valid run:
+// each must end with exit 0 or a clear exit 2 within a minute. A signal, an internal error (1),
+// or a run past the limit fails. New options are covered as soon as --help shows them.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <regex>
+#include <sstream>
+#include <vector>
+
+#include "cli_support.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using chladni::test::run_cli;
+
+const char* const kHostile[] = {"nan", "inf", "-inf", "-1", "0", "1e-300", "1e300", "4294967297"};
+
+// Inputs every command's quick run needs, made once.
+const fs::path& inputs() {
+  static const fs::path dir = [] {
+    const fs::path d = chladni::test::temp_path("chladni_hostile");
+    fs::remove_all(d);
+    fs::create_directories(d);
+    std::string cube;
+    for (int v = 0; v < 8; ++v)
+      cube += "v " + std::to_string(0.1 * (v & 1)) + " " + std::to_string(0.1 * (v >> 1 & 1)) +
+              " " + std::to_string(0.1 * (v >> 2 & 1)) + "\n";
+    cube +=
+        "f 1 3 4\nf 1 4 2\nf 5 6 8\nf 5 8 7\nf 1 2 6\nf 1 6 5\nf 3 7 8\nf 3 8 4\nf 1 5 7\n"
+        "f 1 7 3\nf 2 4 8\nf 2 8 6\n";
+    std::ofstream((d / "cube.obj").string()) << cube;
+    std::ofstream((d / "points.txt").string()) << "0 0 1\n0.3 0.2 0.5\n";
+    const std::string s = d.string();
+    for (const std::string& setup :
+         {"precompute " + s + "/cube.obj -o " + s + "/cube.chbank --max-modes 3 -q",
+          "paper-gen flap -o " + s + "/anim --triangles 50 --duration 0.2",
+          "paper-db generate -o " + s +
+              "/db --variants 1 --clip-seconds 0.05 "
+              "--friction-seconds 0.2"}) {
+      const auto r = run_cli(setup);
+      EXPECT_EQ(r.code, 0) << setup << "\n" << r.output;
+    }
+    return d;
+  }();
+  return dir;
+}
+
+// Numeric options listed by `chladni <command> --help`.
+std::vector<std::string> numeric_options(const std::string& command) {
+  const auto help = run_cli(command + " --help");
+  EXPECT_EQ(help.code, 0) << help.output;
+  std::vector<std::string> out;
+  const std::regex line(R"(^\s+(?:-\w,)?(--[\w-]+)(?:,[-\w]+)?\s+(?:FLOAT|INT|UINT)\b)");
+  std::istringstream in(help.output);
+  for (std::string l; std::getline(in, l);) {
+    std::smatch m;
+    if (std::regex_search(l, m, line)) out.push_back(m[1]);
+  }
+  return out;
+}
+
+// `base` without `option` and its value.
+std::string without(const std::string& base, const std::string& option) {
+  std::istringstream in(base);
+  std::string out, tok;
+  while (in >> tok) {
+    if (tok == option) {
+      in >> tok;
+      continue;
+    }
+    out += tok + " ";
+  }
+  return out;
+}
+
+void check_command(const std::string& command, const std::string& base, std::size_t at_least) {
+  const std::vector<std::string> options = numeric_options(command);
+  EXPECT_GE(options.size(), at_least) << command << ": --help lists fewer numeric options";
+  for (const std::string& opt : options)
+    for (const char* value : kHostile) {
+      const std::string args = command + " " + without(base, opt) + opt + " " + value;
+      const auto r = run_cli(args, "", 60);
+      EXPECT_TRUE(r.code == 0 || r.code == 2) << "chladni " << args << "\nexit " << r.code << "\n"
+                                              << r.output.substr(0, 2000);
+      if (r.code == 2) EXPECT_FALSE(r.output.empty()) << args;  // says why
+    }
+}
+
+}  // namespace
+
+TEST(CliHostile, Precompute) {
+  const std::string d = inputs().string();
+  check_command("precompute", d + "/cube.obj -o " + d + "/p.chbank --max-modes 3 --no-transfer -q",
+                15);
+}
+
+TEST(CliHostile, Radiate) {
+  const std::string d = inputs().string();
+  check_command("radiate",
+                d + "/cube.obj --freq 1000 --pattern uniform --points " + d + "/points.txt", 5);
+}
+
+TEST(CliHostile, Render) {
+  const std::string d = inputs().string();
+  check_command("render", CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " + d + "/r.wav -q", 5);
+}
+
+TEST(CliHostile, Shake) {
+  const std::string d = inputs().string();
+  check_command("shake", "guiro -o " + d + "/s.wav --duration 0.2 --bank " + d + "/cube.chbank -q",
+                10);
+}
+
+TEST(CliHostile, Paper) {
+  const std::string d = inputs().string();
+  check_command("paper-gen", "flap -o " + d + "/anim2 --triangles 50 --duration 0.2", 4);
+  check_command("paper", d + "/anim/flap.json -o " + d + "/p.wav --db " + d + "/db", 4);
+  check_command("paper-db generate",
+                "-o " + d + "/db2 --variants 1 --clip-seconds 0.05 --friction-seconds 0.2", 4);
+}
+
+TEST(CliHostile, Bench) {
+  check_command("bench", "--modes 64 --seconds 0.01 --backend cpu", 3);
+}
