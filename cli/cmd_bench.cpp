@@ -13,6 +13,7 @@
 
 #include "backend.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "commands.hpp"
 
 namespace chladni::cli {
@@ -116,11 +117,13 @@ Record measure(const BenchArgs& a, const std::string& backend, uint32_t n) {
 }
 
 void run_bench(const BenchArgs& a) {
+  if (!a.json_path.empty() && a.json_path != "-") check_output_path(a.json_path, "--json");
   std::vector<uint32_t> sizes;
   for (const std::string& s : split(a.modes)) {
     char* end = nullptr;
     const unsigned long v = std::strtoul(s.c_str(), &end, 10);
-    if (*end || v == 0 || v > (1ul << 26)) throw InputError("--modes: bad size '" + s + "'");
+    if (*end || v == 0 || v > (1ul << 24))
+      throw InputError("--modes: '" + s + "' is not a count in [1, 16777216]");
     sizes.push_back(static_cast<uint32_t>(v));
   }
   const std::vector<std::string> backends = split(a.backends);
@@ -158,9 +161,7 @@ void run_bench(const BenchArgs& a) {
     if (a.json_path == "-") {
       std::printf("%s\n", out.dump(2).c_str());
     } else {
-      std::ofstream f(a.json_path);
-      if (!f) throw InputError("cannot write " + a.json_path);
-      f << out.dump(2) << "\n";
+      write_file_atomic(a.json_path, out.dump(2) + "\n", "--json");
     }
   }
 }

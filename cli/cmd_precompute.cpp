@@ -244,7 +244,7 @@ void add_precompute(CLI::App& app) {
                   "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "
                   "80 % of the memory available): larger problems are refused before the "
                   "factorization, with what they would need")
-      ->check(finite_in(-std::numeric_limits<double>::max(), std::numeric_limits<double>::max()));
+      ->check(finite_in(0, 1e6));
   cmd->add_option("--mode-cap", a->mode_cap, "Most modes searched for below --max-freq")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
@@ -282,10 +282,10 @@ void add_precompute(CLI::App& app) {
                   "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")
       ->capture_default_str();
   cmd->add_option("--sound-speed", a->sound_speed, "Speed of sound in air (m/s)")
-      ->check(finite_above(0, 1e5))
+      ->check(finite_in(10, 1e4))
       ->capture_default_str();
   cmd->add_option("--air-density", a->air_density, "Density of air (kg/m^3)")
-      ->check(finite_above(0, 1e5))
+      ->check(finite_in(1e-3, 1e4))
       ->capture_default_str();
   cmd->callback([a] { run_precompute(*a); });
 }

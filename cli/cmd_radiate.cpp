@@ -241,10 +241,10 @@ void add_radiate(CLI::App& app) {
       ->check(finite_above(0, 1e12))
       ->capture_default_str();
   cmd->add_option("--sound-speed", a->sound_speed, "m/s")
-      ->check(finite_above(0, 1e5))
+      ->check(finite_in(10, 1e4))
       ->capture_default_str();
   cmd->add_option("--air-density", a->air_density, "kg/m^3")
-      ->check(finite_above(0, 1e5))
+      ->check(finite_in(1e-3, 1e4))
       ->capture_default_str();
   cmd->add_option("--json", a->json_path, "Write the fit and the pressures as JSON");
   cmd->callback([a] { run_radiate(*a); });

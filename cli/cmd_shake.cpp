@@ -103,6 +103,13 @@ void run_shake(const ShakeArgs& a) {
     if (model->mode_count() == 0)
       throw InputError(a.bank + ": no mode lies below the Nyquist frequency at " +
                        std::to_string(a.sample_rate) + " Hz");
+    // Each voice keeps, per contact point, a gain for every mode: bound that before making it.
+    const double gains = double(a.voices) * a.contacts * double(model->mode_count());
+    if (gains > 6.4e7)
+      throw InputError("--voices " + std::to_string(a.voices) + " x --contacts " +
+                       std::to_string(a.contacts) + " x " + std::to_string(model->mode_count()) +
+                       " modes of " + a.bank +
+                       " is more than the 64 million contact gains a shake may hold");
     object = runtime::object_modes(*model);
     listener_gains(*model, object, parse_vec3(a.listener, "--listener"));
   }

@@ -3,8 +3,10 @@
 // each must end with exit 0 or a clear exit 2 within a minute. A signal, an internal error (1),
 // or a run past the limit fails. New options are covered as soon as --help shows them.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
 #include <regex>
 #include <sstream>
 #include <vector>
@@ -22,7 +24,8 @@ const char* const kHostile[] = {"nan", "inf", "-inf", "-1", "0", "1e-300", "1e30
 // Inputs every command's quick run needs, made once.
 const fs::path& inputs() {
   static const fs::path dir = [] {
-    const fs::path d = chladni::test::temp_path("chladni_hostile");
+    // Per process: ctest runs these tests side by side.
+    const fs::path d = chladni::test::temp_path("chladni_hostile_" + std::to_string(::getpid()));
     fs::remove_all(d);
     fs::create_directories(d);
     std::string cube;
@@ -125,4 +128,28 @@ TEST(CliHostile, Paper) {
 
 TEST(CliHostile, Bench) {
   check_command("bench", "--modes 64 --seconds 0.01 --backend cpu", 3);
+}
+
+// A single tetrahedron (a volume bound larger than the solid keeps it one) has 24 elastic modes
+// (quadratic elements: 10 nodes, 30 DOFs, six rigid):
+// the first few are found (densely, where Lanczos would need more vectors than exist) and asking
+// for more than there are is a clear refusal, not "did not converge".
+TEST(CliHostile, TinySolidsGetTheirModesOrAClearRefusal) {
+  const std::string d = inputs().string();
+  const std::string tet = d + "/tet.obj";
+  std::ofstream(tet) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\n"
+                        "f 2 3 4\n";
+  auto r = run_cli("precompute " + tet + " -o " + d +
+                   "/tet.chbank --max-modes 5 --no-transfer --max-tet-volume 10");
+  EXPECT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("tetrahedra 1 "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("5 elastic modes"), std::string::npos) << r.output;
+  r = run_cli("precompute " + tet + " -o " + d +
+              "/tet.chbank --max-modes 30 --no-transfer --max-tet-volume 10");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("has only 24 elastic modes"), std::string::npos) << r.output;
+  r = run_cli("precompute " + d + "/cube.obj -o " + d +
+              "/c.chbank --order 1 --max-modes 5 "
+              "--no-transfer");
+  EXPECT_EQ(r.code, 0) << r.output;
 }

@@ -1,6 +1,7 @@
 // Paper sound, issue 5: the animation format, the sheet's geometry and the per-frame analysis
 // (Schreck et al. 2016, §4) against the generated scenarios, whose event frames are known.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <sys/wait.h>
 #include <cmath>
@@ -348,6 +349,13 @@ TEST(PaperFormat, BadInputNamesFileFrameAndProblem) {
   expect_has(with("\"vertices\": [", "\"vertices\": [99999,"), "anchors[0]");
   expect_has(with("\"normal\": [", "\"normal\": [0, 0, 0], \"x\": ["), "obstacles[0]");
   expect_has(with("{", "{,"), "edited.json:1:");
+  // A frame rate that would turn the frames into days of sound, or a division by almost zero.
+  expect_has(with("\"frame_rate\": 60.0", "\"frame_rate\": 1e-300"),
+             "frame_rate must lie in [1, 10000]");
+  expect_has(with("\"frame_rate\": 60.0", "\"frame_rate\": 0.01"),
+             "frame_rate must lie in [1, 10000]");
+  expect_has(with("\"frame_rate\": 60.0", "\"frame_rate\": 60.0, \"frame_rate\": 30"),
+             "duplicate key 'frame_rate'");
 
   // Binary frames: a flipped byte is a checksum error, a cut file too.
   write_paper_animation(dir + "/bin.json", s.animation, PaperFrameStorage::Binary);
@@ -359,6 +367,26 @@ TEST(PaperFormat, BadInputNamesFileFrameAndProblem) {
   expect_has(load_error(dir + "/bin.json"), "checksum");
   std::filesystem::resize_file(bin, 30);
   expect_has(load_error(dir + "/bin.json"), "bin.chpaper");
+
+  // A .chpaper claiming 2^32 - 1 triangles with a valid checksum is refused before allocating.
+  {
+    std::vector<uint8_t> b = {'C', 'H', 'P', 'A', 'P', 'E', 'R', '1'};
+    for (uint32_t v : {1u, 4u, 0xffffffffu, 2u}) {  // version, vertices, triangles, frames
+      for (int k = 0; k < 4; ++k) b.push_back(uint8_t(v >> (8 * k)));
+    }
+    b.resize(b.size() + 64, 0);
+    const uint32_t c = uint32_t(crc32(crc32(0L, Z_NULL, 0), b.data(), uInt(b.size())));
+    for (int k = 0; k < 4; ++k) b.push_back(uint8_t(c >> (8 * k)));
+    std::ofstream(bin, std::ios::binary | std::ios::trunc)
+        .write(reinterpret_cast<const char*>(b.data()), std::streamsize(b.size()));
+    const std::string m = load_error(dir + "/bin.json");
+    expect_has(m, "bin.chpaper");
+    expect_has(m, "do not fit");
+  }
+  // The frame file given as a directory.
+  std::filesystem::remove(bin);
+  std::filesystem::create_directories(bin);
+  expect_has(load_error(dir + "/bin.json"), "bin.chpaper: is a directory");
 }
 
 TEST(PaperCli, GeneratesAndAnalysesTheExamples) {

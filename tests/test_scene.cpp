@@ -62,7 +62,7 @@ TEST(Scene, NamesTheJsonPathOfEachProblem) {
   };
   const std::vector<Case> cases = {
       {[](json& j) { j["events"][0].erase("time"); }, "$.events[0]: missing required field 'time'"},
-      {[](json& j) { j["events"][1]["time"] = -1; }, "$.events[1].time: must be >= 0"},
+      {[](json& j) { j["events"][1]["time"] = -1; }, "$.events[1].time: must lie in [0, 3600] s"},
       {[](json& j) { j["events"][0]["object"] = "plate"; },
        "$.events[0].object: unknown object 'plate'"},
       {[](json& j) { j["events"][0]["impulse"] = "hard"; },
@@ -168,4 +168,58 @@ TEST(Scene, OrientationAndMoveEvents) {
       error_of(j).find("unknown event type 'teleport' (known: impact, move, listener, shake)"),
       std::string::npos)
       << error_of(j);
+}
+
+// nlohmann-json alone keeps the last of two equal keys and throws its own text for 1e400.
+TEST(Scene, DuplicateKeysAndOverflowingNumbersNameFileAndPlace) {
+  const auto error = [](const std::string& name, const std::string& text) {
+    const auto path = std::filesystem::temp_directory_path() / name;
+    std::ofstream(path) << text;
+    try {
+      load_scene(path.string());
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  std::string msg = error("chladni_dup.json", R"({"objects": [{"name": "a", "gain": 1,
+    "modes": [{"frequency": 440, "decay": 1, "amplitude": 1}], "gain": 2}], "events": []})");
+  EXPECT_NE(msg.find("chladni_dup.json: $.objects[0]: duplicate key 'gain'"), std::string::npos)
+      << msg;
+  msg = error("chladni_dup2.json", R"({"sample_rate": 48000, "events": [], "sample_rate": 44100})");
+  EXPECT_NE(msg.find("chladni_dup2.json: $: duplicate key 'sample_rate'"), std::string::npos)
+      << msg;
+  msg = error("chladni_big.json", "{\"objects\": [],\n \"gain\": 1e400}");
+  EXPECT_NE(msg.find("chladni_big.json:2:10: the number 1e400 does not fit a double"),
+            std::string::npos)
+      << msg;
+}
+
+// A scene is held in memory while it renders: every time is bounded, so a typo cannot ask for
+// a render of days (or silently drop an event at 1e300 s).
+TEST(Scene, EventTimesAreBoundedToAnHour) {
+  for (double t : {3600.5, 1e5, 1e300}) {
+    json j = good();
+    j["events"][0]["time"] = t;
+    EXPECT_NE(error_of(j).find("$.events[0].time: must lie in [0, 3600] s"), std::string::npos)
+        << t << ": " << error_of(j);
+  }
+  json j = good();
+  j["events"][0]["time"] = 3600.0;
+  EXPECT_EQ(error_of(j), "(no error)");
+}
+
+TEST(Scene, DirectoriesAndDevicesAreRefusedWithTheirName) {
+  const auto error = [](const std::string& path) {
+    try {
+      load_scene(path);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  const std::string dir = std::filesystem::temp_directory_path().string();
+  EXPECT_NE(error(dir).find("scene " + dir + ": is a directory"), std::string::npos);
+  EXPECT_NE(error("/dev/zero").find("scene /dev/zero: is a device"), std::string::npos);
+  EXPECT_NE(error("").find("the file name is empty"), std::string::npos);
 }

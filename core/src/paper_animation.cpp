@@ -10,6 +10,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/input_file.hpp"
 #include "chladni/core/json_reader.hpp"
+#include "chladni/core/output_file.hpp"
 
 namespace chladni {
 namespace {
@@ -207,9 +208,9 @@ void write_paper_frames_binary(const std::string& path, const PaperAnimation& an
     for (uint32_t v : t) w.le(v);
   for (float x : anim.positions) w.le(x);
   w.le(binary_io::crc32_of(w.bytes.data(), w.bytes.size()));
-  std::ofstream out(path, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(w.bytes.data()), std::streamsize(w.bytes.size()));
-  if (!out) throw InputError("cannot write " + path);
+  write_file_atomic(path,
+                    std::string_view(reinterpret_cast<const char*>(w.bytes.data()), w.bytes.size()),
+                    "paper frame file");
 }
 
 void read_paper_frames_binary(const std::string& path, PaperAnimation& anim) {
@@ -374,9 +375,8 @@ void write_paper_animation(const std::string& json_path, const PaperAnimation& a
                    {"forward", anim.listener.forward},
                    {"up", anim.listener.up},
                    {"ear_distance", anim.listener.ear_distance}};
-  std::ofstream out(json_path);
-  out << j.dump(2) << "\n";
-  if (!out) throw InputError("cannot write " + json_path);
+  // Last, and whole: the animation exists once its frames do.
+  write_file_atomic(json_path, j.dump(2) + "\n", "paper animation");
 }
 
 }  // namespace chladni

@@ -18,124 +18,12 @@
 #include <thread>
 
 #include "chladni/core/error.hpp"
-#include "cholmod_factor.hpp"  // FactorEstimate in every build; CholmodFactor with CHOLMOD
 #include "eigensolve_dense.hpp"
+#include "shift_invert.hpp"
 #include "timing.hpp"
 
 namespace chladni::precompute {
 namespace {
-
-// K - sigma M = P^T L L^T P (sigma < 0, so the matrix is SPD). Lanczos then runs on the standard
-// symmetric operator C = L^-1 P M P^T L^-T, whose eigenpairs are 1 / (lambda - sigma) and
-// y = L^T P v: the same spectrum as shift-invert, but with Euclidean inner products, so no
-// mass-matrix product per inner product and per reorthogonalization pass (which dominated the
-// generalized mode of Spectra).
-#ifdef CHLADNI_HAVE_CHOLMOD
-constexpr const char* kFactorName = "CHOLMOD supernodal LLT";
-
-// CHOLMOD's supernodal LLT with every call checked (cholmod_factor.cpp).
-class Factor {
- public:
-  FactorEstimate analyze(const SparseMatrix& A) { return chol_.analyze(A); }
-  bool factor(const SparseMatrix& A) { return chol_.factorize(A); }
-  // x <- P^T L^-T x  and  x <- L^-1 P x
-  template <class Dense>
-  void upper_solve(Dense& x) {
-    chol_.upper_solve(x.data(), long(x.rows()), long(x.cols()));
-  }
-  template <class Dense>
-  void lower_solve(Dense& x) {
-    chol_.lower_solve(x.data(), long(x.rows()), long(x.cols()));
-  }
-
- private:
-  CholmodFactor chol_;
-};
-#else
-constexpr const char* kFactorName = "Eigen SimplicialLDLT";
-
-// P A P^T = L D L^T; the split factor is L D^1/2.
-class Factor {
- public:
-  FactorEstimate analyze(const SparseMatrix&) { return {}; }  // unknown before factorizing
-  bool factor(const SparseMatrix& A) {
-    ldlt_.compute(A);
-    if (ldlt_.info() != Eigen::Success || (ldlt_.vectorD().array() <= 0).any()) return false;
-    sqrt_d_ = ldlt_.vectorD().array().sqrt();
-    return true;
-  }
-  template <class Dense>
-  void upper_solve(Dense& x) {
-    x = sqrt_d_.cwiseInverse().asDiagonal() * x;
-    ldlt_.matrixU().solveInPlace(x);
-    x = ldlt_.permutationPinv() * x;
-  }
-  template <class Dense>
-  void lower_solve(Dense& x) {
-    x = ldlt_.permutationP() * x;
-    ldlt_.matrixL().solveInPlace(x);
-    x = sqrt_d_.cwiseInverse().asDiagonal() * x;
-  }
-
- private:
-  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Lower> ldlt_;
-  Eigen::VectorXd sqrt_d_;
-};
-#endif
-
-class SplitShiftInvert {
- public:
-  using Scalar = double;
-  SplitShiftInvert(const SparseMatrix& K, const SparseMatrix& M) : K_(K), M_(M), w_(K.rows()) {}
-  Eigen::Index rows() const { return K_.rows(); }
-  Eigen::Index cols() const { return K_.cols(); }
-  // The pattern of K - sigma M is the same for every sigma: analyzed once.
-  FactorEstimate analyze() {
-    SparseMatrix A = K_ - M_;
-    A.makeCompressed();
-    return factor_.analyze(A);
-  }
-  void factor(double sigma) {
-    SparseMatrix A = K_ - sigma * M_;
-    A.makeCompressed();
-    if (!factor_.factor(A))
-      throw InputError("the sparse factorization of K - sigma M (" + std::to_string(K_.rows()) +
-                       " DOFs, " + std::to_string(K_.nonZeros()) +
-                       " entries) failed: the problem is too large for the factorization or the "
-                       "stiffness is not positive semi-definite; lower --max-freq or raise "
-                       "--max-tet-volume");
-  }
-  // y = C x, for Spectra.
-  void perform_op(const double* x, double* y) const {
-    w_ = Eigen::Map<const Eigen::VectorXd>(x, rows());
-    apply(w_);
-    Eigen::Map<Eigen::VectorXd>(y, rows()) = w_;
-  }
-  // W = C V for a block of vectors: the factor and M are read once for all columns.
-  void apply_block(const Eigen::MatrixXd& V, Eigen::MatrixXd& W) const {
-    W = V;
-    apply(W);
-  }
-  // Each column y <- P^T L^-T y, a vector of the original problem.
-  void to_modes(Eigen::MatrixXd& Y) { factor_.upper_solve(Y); }
-  mutable double solve_seconds = 0;
-
- private:
-  // X <- C X = L^-1 P M P^T L^-T X
-  template <class Dense>
-  void apply(Dense& X) const {
-    const auto t0 = std::chrono::steady_clock::now();
-    factor_.upper_solve(X);
-    Dense MX = M_ * X;
-    factor_.lower_solve(MX);
-    X = std::move(MX);
-    solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  }
-  const SparseMatrix& K_;
-  const SparseMatrix& M_;
-  mutable Factor factor_;  // CHOLMOD's workspace changes during solves
-  mutable Eigen::VectorXd w_;
-};
 
 // A * X with the columns of X split over the cores (Eigen runs sparse * dense on one).
 Eigen::MatrixXd parallel_product(const SparseMatrix& A, const Eigen::MatrixXd& X) {

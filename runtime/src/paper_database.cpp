@@ -11,6 +11,7 @@
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/json_reader.hpp"
+#include "chladni/core/output_file.hpp"
 
 namespace chladni::runtime {
 namespace fs = std::filesystem;
@@ -290,9 +291,8 @@ void write_paper_database(const std::string& dir, const PaperSoundDb& db, double
   root["description"] = db.description;
   root["entries"] = entries;
   const std::string index = (fs::path(dir) / "paper_db.json").string();
-  std::ofstream f(index);
-  f << root.dump(1) << "\n";
-  if (!f) throw InputError(index + ": cannot write");
+  // Written last and whole: a folder is a database only once every clip is in it.
+  write_file_atomic(index, root.dump(1) + "\n", "paper sound database");
 }
 
 PaperSoundDb load_paper_database(const std::string& dir) {
@@ -315,7 +315,12 @@ PaperSoundDb load_paper_database(const std::string& dir) {
     if (!name.is_string()) json_reader::fail(path, "expected a file name");
     const std::string file = (fs::path(dir) / name.get<std::string>()).string();
     if (!fs::exists(file)) json_reader::fail(path, "file " + file + " does not exist");
-    AudioBuffer a = read_audio(file);
+    AudioBuffer a;
+    try {
+      a = read_audio(file);
+    } catch (const InputError& e) {
+      json_reader::fail(path, e.what());
+    }
     if (a.sample_rate != static_cast<int>(db.sample_rate))
       json_reader::fail(path, file + " is at " + std::to_string(a.sample_rate) +
                                   " Hz, the database at " + std::to_string(int(db.sample_rate)) +
