@@ -2,6 +2,8 @@
 # The README's two commands in either order: configuring a folder the demo's way and then the
 # tests' way must give a folder with the whole suite (and ctest must refuse an empty one).
 set -euo pipefail
+# The sanitizer run preloads libasan into every process; CMake and the compiler are not ours.
+unset LD_PRELOAD ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS
 src=$1 dir=$2
 rm -rf "$dir"
 bash "$src/scripts/configure.sh" demo "$dir" >/dev/null
