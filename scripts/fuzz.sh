@@ -26,6 +26,7 @@ export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 fuzz_one() {
   local name=$1 seconds=$2
   local work=build/fuzz/corpus/$name findings=build/fuzz/findings/$name
+  rm -rf "$findings"  # only this run's findings are reported and kept
   mkdir -p "$work" "$findings"
   # -rss_limit_mb: a reader that allocates past 2 GB for a small file is a finding;
   # -timeout: one input taking over 10 s is a hang.
