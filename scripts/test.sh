@@ -31,5 +31,5 @@ LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --output-on-failure --no-tests=error -j "$jobs"
 
-echo "== fuzzing every reader for ${CHLADNI_FUZZ_SECONDS:-20} s each (scripts/fuzz.sh)"
-bash scripts/fuzz.sh "${CHLADNI_FUZZ_SECONDS:-20}"
+echo "== fuzzing every reader for ${CHLADNI_FUZZ_SECONDS:-15} s each (scripts/fuzz.sh)"
+bash scripts/fuzz.sh "${CHLADNI_FUZZ_SECONDS:-15}"
