@@ -87,7 +87,6 @@ std::vector<cd> pattern_velocity(const std::string& spec, const precompute::Surf
 
 void run_radiate(const RadiateArgs& a) {
   if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
-  if (!(a.freq > 0) || !std::isfinite(a.freq)) throw InputError("--freq must be finite and > 0");
   if (a.velocity.empty() == a.pattern.empty())
     throw InputError("give exactly one of --velocity FILE and --pattern NAME");
   if (a.via != "sources" && a.via != "multipole" && a.via != "surface")

@@ -168,9 +168,6 @@ void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
 
 void run_render(const RenderArgs& a) {
   check_output_path(a.output, "output");
-  if (a.sample_rate && (a.sample_rate < 8000 || a.sample_rate > 384000))
-    throw InputError("--sample-rate must lie in [8000, 384000]");
-  if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
   const SampleFormat format = parse_sample_format(a.format);
   Scene scene = load_scene(a.scene);
   if (a.sample_rate) scene.sample_rate = a.sample_rate;

@@ -77,14 +77,6 @@ void run_shake(const ShakeArgs& a) {
   check_output_path(a.output, "output");
   if (!a.spectrogram.empty()) check_output_path(a.spectrogram, "--spectrogram");
   const runtime::PhisemPreset& preset = runtime::phisem_preset(a.instrument);
-  if (a.sample_rate < 8000 || a.sample_rate > 384000)
-    throw InputError("--sample-rate must lie in [8000, 384000]");
-  if (a.block == 0 || a.block > 16384) throw InputError("--block must lie in [1, 16384]");
-  if (a.voices == 0 || a.voices > 4096) throw InputError("--voices must lie in [1, 4096]");
-  if (!(std::isfinite(a.particles) && a.particles >= 0 && a.particles <= 1e6))
-    throw InputError("--particles must lie in [0, 1e6] (0: the instrument's own)");
-  if (!(std::isfinite(a.duration) && a.duration > 0 && a.duration <= 3600))
-    throw InputError("--duration must lie in (0, 3600] s");
   const SampleFormat format = parse_sample_format(a.format);
   const double fs = a.sample_rate;
   const int channels = a.voices > 1 ? 2 : 1;

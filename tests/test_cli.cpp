@@ -1,6 +1,5 @@
 // The chladni command end to end: exit codes, messages, the WAV it writes, bench's JSON.
 #include <gtest/gtest.h>
-#include <sys/wait.h>
 
 #include <cmath>
 #include <complex>

@@ -21,8 +21,8 @@ std::string mib(std::uint64_t bytes) {
 
 std::vector<std::uint8_t> read_input_file(const std::string& path, const std::string& what,
                                           std::uint64_t max_bytes) {
-  const std::string who = what + " " + (path.empty() ? std::string("''") : path);
   if (path.empty()) throw InputError(what + ": the file name is empty");
+  const std::string who = what + " " + path;
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0)
     throw InputError(who + ": cannot open (" + std::strerror(errno) + ")");

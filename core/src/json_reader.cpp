@@ -9,7 +9,7 @@ namespace chladni::json_reader {
 namespace {
 
 // "file:line:column" of byte offset `byte` (1-based, as nlohmann reports it).
-std::string where(const std::string& path, const std::string& text, std::size_t byte) {
+std::string where(const std::string& path, std::string_view text, std::size_t byte) {
   std::size_t line = 1, col = 1;
   for (std::size_t k = 0; k + 1 < byte && k < text.size(); ++k) {
     if (text[k] == '\n')
@@ -76,7 +76,7 @@ class DuplicateKeyCheck {
 
 }  // namespace
 
-json parse_json_text(const std::string& text, const std::string& path) {
+json parse_json_text(std::string_view text, const std::string& path) {
   try {
     return json::parse(text, DuplicateKeyCheck(path));
   } catch (const json::parse_error& e) {
@@ -101,7 +101,8 @@ json parse_json_text(const std::string& text, const std::string& path) {
 
 json read_json_file(const std::string& path, const char* what) {
   const std::vector<std::uint8_t> bytes = read_input_file(path, what, kMaxTextInputBytes);
-  return parse_json_text(std::string(bytes.begin(), bytes.end()), path);
+  return parse_json_text(
+      std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()), path);
 }
 
 }  // namespace chladni::json_reader

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "chladni/core/error.hpp"
@@ -122,7 +123,7 @@ inline std::string index_path(const std::string& base, std::size_t i) {
 
 /// Parses JSON text read from `path`: a syntax error or an overflowing number names
 /// file:line:column, a duplicate key names its JSON path (nlohmann would keep the last).
-json parse_json_text(const std::string& text, const std::string& path);
+json parse_json_text(std::string_view text, const std::string& path);
 
 /// Reads (read_input_file, at most kMaxTextInputBytes) and parses a JSON file. `what` names the
 /// kind of file.
