@@ -103,7 +103,7 @@ class Body {
   void set_item(const std::string& item) { item_ = item; }
   [[noreturn]] void fail(const std::string& what) const {
     if (format_ == Format::Ascii) text_.fail(what);
-    throw InputError(path_ + ": " + item_ + ": " + what);
+    throw InputError(path_ + ": " + (item_.empty() ? "" : item_ + ": ") + what);
   }
   void finish() {
     if (format_ == Format::Ascii ? !text_.at_end() : pos_ != bytes_.size())
