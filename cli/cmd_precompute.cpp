@@ -29,6 +29,7 @@ struct PrecomputeArgs {
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
   std::string eigensolver = "block", transfer_backend = "auto", transfer_method = "auto";
   bool repair = false, quiet = false, no_transfer = false;
+  std::string batch_stamp;
   int transfer_order = 0;
   std::size_t transfer_max_sources = 1024;
   double sound_speed = 343.0, air_density = 1.204;
@@ -129,6 +130,7 @@ void run_precompute(const PrecomputeArgs& a) {
   else if (a.mass != "consistent")
     throw InputError("--mass must be consistent or lumped");
   o.max_modes = a.max_modes;
+  o.batch_stamp = a.batch_stamp;
   o.max_frequency = a.max_freq;
   o.sample_rate = a.sample_rate;
   o.max_tet_volume = a.max_tet_volume;
@@ -287,6 +289,12 @@ void add_precompute(CLI::App& app) {
   cmd->add_option("--air-density", a->air_density, "Density of air (kg/m^3)")
       ->check(finite_in(1e-3, 1e4))
       ->capture_default_str();
+  // Set by `chladni batch` only: recorded so a rerun knows this soundbank is current.
+  cmd->add_option("--batch-stamp", a->batch_stamp)->group("")->check([](const std::string& s) {
+    return s.size() == 32 && s.find_first_not_of("0123456789abcdef") == std::string::npos
+               ? std::string()
+               : std::string("expected 32 hex digits");
+  });
   cmd->callback([a] { run_precompute(*a); });
 }
 

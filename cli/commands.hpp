@@ -44,6 +44,11 @@ inline CLI::Validator thread_count() {
   return CLI::Range(0, 1024);
 }
 
+/// Thrown by a command that ends with a non-zero exit code it has already explained.
+struct ExitCode {
+  int code;
+};
+
 // Each adds its subcommand to `app`; the callback runs it (errors propagate as exceptions).
 void add_render(CLI::App& app);
 void add_bench(CLI::App& app);
@@ -54,5 +59,6 @@ void add_info(CLI::App& app);
 void add_radiate(CLI::App& app);
 void add_paper(CLI::App& app);
 void add_shake(CLI::App& app);
+void add_batch(CLI::App& app);
 
 }  // namespace chladni::cli

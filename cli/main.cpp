@@ -1,16 +1,19 @@
-// chladni: command-line front end. Exit codes (DESIGN.md): 0 success, 2 bad input, 1 failure.
+// chladni: command-line front end. Exit codes (DESIGN.md): 0 success, 2 bad input, 3 over the
+// memory budget, 1 failure.
 #include <cstdio>
 #include <exception>
 
 #include "chladni/core/error.hpp"
+#include "chladni/core/version.hpp"
 #include "chladni/gpu/context.hpp"
 #include "commands.hpp"
 
 int main(int argc, char** argv) {
   CLI::App app{"Chladni: GPU-accelerated modal sound synthesis"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "chladni 0.1.0");
+  app.set_version_flag("--version", std::string("chladni ") + chladni::kVersion);
   chladni::cli::add_precompute(app);
+  chladni::cli::add_batch(app);
   chladni::cli::add_info(app);
   chladni::cli::add_materials(app);
   chladni::cli::add_radiate(app);
@@ -26,6 +29,11 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     app.exit(e);
     return 2;
+  } catch (const chladni::cli::ExitCode& e) {
+    return e.code;
+  } catch (const chladni::BudgetError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 3;
   } catch (const chladni::InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 2;

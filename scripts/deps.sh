@@ -7,6 +7,7 @@ PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   libeigen3-dev nlohmann-json3-dev libcli11-dev libsndfile1-dev
+  libxxhash-dev openmpi-bin libopenmpi-dev
   libgtest-dev libgmock-dev libbenchmark-dev libstk-dev
   zlib1g-dev libfftw3-dev libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
   clang-format clang libclang-rt-14-dev llvm

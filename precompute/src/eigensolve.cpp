@@ -172,7 +172,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
            std::to_string(std::llround(est.entries)) + ", " +
            std::to_string(std::llround(est.flops / 1e9)) + " GFLOP)");
   if (o.max_memory > 0 && est.bytes + r.basis_bytes > o.max_memory)
-    throw InputError("the eigen-solve would need about " + gigabytes(est.bytes + r.basis_bytes) +
+    throw BudgetError("the eigen-solve would need about " + gigabytes(est.bytes + r.basis_bytes) +
                      " (the sparse factor of K - sigma M for " + std::to_string(n) +
                      " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " +
                      std::to_string(std::llround(est.entries)) + ", " +

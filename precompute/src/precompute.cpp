@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "chladni/core/error.hpp"
+#include "chladni/core/version.hpp"
 
 namespace chladni::precompute {
 namespace {
@@ -256,7 +257,8 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
 
   nlohmann::json meta;
-  meta["generator"] = "chladni 0.1.0";
+  meta["generator"] = std::string("chladni ") + kVersion;
+  if (!o.batch_stamp.empty()) meta["batch_stamp"] = o.batch_stamp;
   meta["source"] = origin;
   meta["element_order"] = o.order;
   meta["mass"] = o.mass == MassKind::Lumped ? "lumped" : "consistent";

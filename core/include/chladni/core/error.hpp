@@ -1,6 +1,7 @@
 #pragma once
 // Errors are exceptions inside the library; the CLI maps them to exit codes (DESIGN.md):
-// InputError -> 2 (the user's data or arguments are wrong), anything else -> 1.
+// InputError -> 2 (the user's data or arguments are wrong), BudgetError -> 3 (more memory than
+// allowed), anything else -> 1.
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +11,13 @@ namespace chladni {
 class InputError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
+};
+
+/// The work asked for does not fit the memory budget (--max-memory): exit code 3, so a batch
+/// can tell it from other bad input and retry with more memory.
+class BudgetError : public InputError {
+ public:
+  using InputError::InputError;
 };
 
 /// `e` with `file` named first (a problem found in what `file` asks for, such as a scene's

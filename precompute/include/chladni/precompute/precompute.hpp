@@ -37,6 +37,8 @@ struct PrecomputeOptions {
   double max_memory = -1;
   bool transfer = true;  ///< fit acoustic transfer per mode (XFER)
   AcousticOptions acoustic;
+  /// Recorded in META as "batch_stamp": the batch's hash of what made this soundbank.
+  std::string batch_stamp;
   /// Vulkan device for the transfer kernels; null: the double-precision CPU kernels.
   std::shared_ptr<gpu::Context> gpu;
 };

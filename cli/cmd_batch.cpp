@@ -1,0 +1,136 @@
+// chladni batch MANIFEST: many assets precomputed, in parallel and resumable, on one machine or
+// across MPI ranks (docs/batch.md). The driver is precompute/src/batch/.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <thread>
+
+#include "chladni/core/error.hpp"
+#include "chladni/core/material.hpp"
+#include "chladni/core/output_file.hpp"
+#include "chladni/precompute/batch.hpp"
+#include "commands.hpp"
+
+namespace chladni::cli {
+namespace {
+
+namespace fs = std::filesystem;
+namespace batch = precompute::batch;
+
+struct BatchArgs {
+  std::string manifest, output_dir, summary, log_dir;
+  int jobs = 0, threads = 0;
+  double max_memory_gb = -1;
+  bool force = false, dry_run = false, quiet = false;
+};
+
+// The precompute command's own parser decides what a manifest may say.
+batch::OptionSchema precompute_schema() {
+  batch::OptionSchema s;
+  s.kind = [](const std::string& name) {
+    CLI::App app;
+    add_precompute(app);
+    const CLI::Option* opt = app.get_subcommand("precompute")->get_option_no_throw("--" + name);
+    if (!opt || opt->get_group().empty()) return batch::OptionSchema::Unknown;
+    return opt->get_items_expected_min() == 0 ? batch::OptionSchema::Flag
+                                              : batch::OptionSchema::Value;
+  };
+  s.check = [](const std::vector<std::string>& args) {
+    CLI::App app;
+    add_precompute(app);
+    CLI::App* cmd = app.get_subcommand("precompute");
+    cmd->callback([] {});
+    std::vector<std::string> reversed{args.rbegin(), args.rend()};
+    reversed.push_back("precompute");
+    try {
+      app.parse(reversed);
+    } catch (const CLI::ParseError& e) {
+      throw InputError(e.what());
+    }
+    // What only the run would find otherwise: the material preset and the damping model.
+    if (const CLI::Option* m = cmd->get_option_no_throw("--material"); m && m->count())
+      (void)find_material(m->as<std::string>());
+    if (const CLI::Option* d = cmd->get_option_no_throw("--damping"); d && d->count())
+      (void)DampingModel::parse(d->as<std::string>());
+  };
+  return s;
+}
+
+void run_batch_command(const BatchArgs& a) {
+  batch::RunOptions o;
+  o.exe = fs::read_symlink("/proc/self/exe").string();
+  o.jobs = a.jobs > 0 ? a.jobs : std::max(1, int(std::thread::hardware_concurrency()));
+  o.threads = a.threads;
+  o.memory_budget = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
+  o.force = a.force;
+  o.dry_run = a.dry_run;
+  o.log_dir = a.log_dir;
+  if (!a.quiet)
+    o.print = [](const std::string& line) {
+      std::printf("%s\n", line.c_str());
+      std::fflush(stdout);
+    };
+  batch::Manifest m;
+  batch::Summary s;
+  if (batch::launched_by_mpi()) {
+    std::string error;
+    try {
+      m = batch::read_manifest(a.manifest, a.output_dir, precompute_schema());
+    } catch (const InputError& e) {
+      error = e.what();
+    }
+    bool root = true;
+    s = batch::run_batch_mpi(m, error, o, root);
+    if (!root) throw ExitCode{s.exit_code()};
+  } else {
+    m = batch::read_manifest(a.manifest, a.output_dir, precompute_schema());
+    const std::string summary =
+        a.summary.empty() ? (fs::path(m.output_dir) / "batch-summary.json").string() : a.summary;
+    if (!a.dry_run) {
+      std::error_code ec;
+      if (a.summary.empty()) fs::create_directories(m.output_dir, ec);
+      check_output_path(summary, "--summary");
+    }
+    s = batch::run_batch(m, o);
+  }
+  const std::string summary =
+      a.summary.empty() ? (fs::path(m.output_dir) / "batch-summary.json").string() : a.summary;
+  if (!a.quiet) std::printf("%s", batch::summary_table(s).c_str());
+  if (!a.dry_run) {
+    write_file_atomic(summary, batch::summary_json(m, s), "--summary");
+    if (!a.quiet) std::printf("wrote %s\n", summary.c_str());
+  }
+  if (s.exit_code() != 0) throw ExitCode{s.exit_code()};
+}
+
+}  // namespace
+
+void add_batch(CLI::App& app) {
+  auto a = std::make_shared<BatchArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "batch",
+      "Precompute every asset of a manifest (JSON or CSV), in parallel and resumable; "
+      "under mpirun across its ranks");
+  cmd->add_option("manifest", a->manifest, "Manifest: .json, or .csv (docs/batch.md)")->required();
+  cmd->add_option("-o,--output-dir", a->output_dir,
+                  "Folder for the soundbanks (default: the manifest's output_dir, or its folder)");
+  cmd->add_option("-j,--jobs", a->jobs, "Assets at once on this machine (0: one per core)")
+      ->check(CLI::Range(0, 1024))
+      ->capture_default_str();
+  cmd->add_option("--threads", a->threads, "Threads per asset (0: the cores divided among jobs)")
+      ->check(thread_count())
+      ->capture_default_str();
+  cmd->add_option("--max-memory", a->max_memory_gb,
+                  "Memory for all jobs together (GB; default 80 % of the memory available), "
+                  "shared among them; an asset that does not fit its share is retried alone")
+      ->check(finite_in(0, 1e6));
+  cmd->add_flag("--force", a->force, "Recompute assets whose soundbank is current too");
+  cmd->add_flag("--dry-run", a->dry_run, "Say what would run and what is current; run nothing");
+  cmd->add_option("--summary", a->summary,
+                  "Summary JSON to write (default OUTPUT_DIR/batch-summary.json)");
+  cmd->add_option("--log-dir", a->log_dir, "Per-asset logs (default OUTPUT_DIR/batch-logs)");
+  cmd->add_flag("-q,--quiet", a->quiet, "No progress and no table");
+  cmd->callback([a] { run_batch_command(*a); });
+}
+
+}  // namespace chladni::cli
