@@ -187,7 +187,8 @@ TEST(BatchCli, BadAssetsSkippedAndReRunsRedoOnlyWhatChanged) {
   const auto write_manifest = [&](int modes) {
     std::ofstream(d / "m.json") << R"({"output_dir": "banks",
       "defaults": {"max-modes": 4, "no-transfer": true},
-      "assets": ["small.obj", "open.obj", "missing.obj",
+      "assets": ["small.obj", "open.obj", "missing.obj", ")"
+                                << CHLADNI_SOURCE_DIR << R"(/meshes/broken/*.obj",
                  {"mesh": "large.obj", "material": "brass", "max-modes": )"
                                 << modes << "}]}";
   };
@@ -200,11 +201,14 @@ TEST(BatchCli, BadAssetsSkippedAndReRunsRedoOnlyWhatChanged) {
   EXPECT_EQ(st["large"], "ok");
   EXPECT_EQ(st["open"], "bad input");
   EXPECT_EQ(st["missing"], "bad input");
+  EXPECT_EQ(st["elephant_with_holes"], "bad input");  // the bundled broken meshes
+  EXPECT_EQ(st["teapot_solid_selfintersecting"], "bad input");
   const nlohmann::json rows = read_json(summary)["assets"];
   EXPECT_NE(rows[1]["error"].get<std::string>().find("open.obj"), std::string::npos);
   EXPECT_NE(rows[2]["error"].get<std::string>().find("missing.obj"), std::string::npos);
-  EXPECT_EQ(rows[3]["modes"], 5);
-  EXPECT_GT(rows[3]["peak_memory_mb"].get<double>(), 1.0);
+  EXPECT_EQ(rows[5]["asset"], "large");
+  EXPECT_EQ(rows[5]["modes"], 5);
+  EXPECT_GT(rows[5]["peak_memory_mb"].get<double>(), 1.0);
   EXPECT_NE(r.output.find("bad input"), std::string::npos) << r.output;
   const chladni::Soundbank large = chladni::read_soundbank((d / "banks/large.chbank").string());
   EXPECT_EQ(large.mode_count(), 5u);
