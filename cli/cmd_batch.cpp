@@ -29,7 +29,7 @@ batch::OptionSchema precompute_schema() {
   batch::OptionSchema s;
   s.kind = [](const std::string& name) {
     CLI::App app;
-    add_precompute(app);
+    add_precompute(app, false);
     const CLI::Option* opt = app.get_subcommand("precompute")->get_option_no_throw("--" + name);
     if (!opt || opt->get_group().empty()) return batch::OptionSchema::Unknown;
     return opt->get_items_expected_min() == 0 ? batch::OptionSchema::Flag
@@ -37,9 +37,8 @@ batch::OptionSchema precompute_schema() {
   };
   s.check = [](const std::vector<std::string>& args) {
     CLI::App app;
-    add_precompute(app);
+    add_precompute(app, false);
     CLI::App* cmd = app.get_subcommand("precompute");
-    cmd->callback([] {});
     std::vector<std::string> reversed{args.rbegin(), args.rend()};
     reversed.push_back("precompute");
     try {

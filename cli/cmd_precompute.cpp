@@ -203,7 +203,7 @@ void run_precompute(const PrecomputeArgs& a) {
 
 }  // namespace
 
-void add_precompute(CLI::App& app) {
+void add_precompute(CLI::App& app, bool run) {
   auto a = std::make_shared<PrecomputeArgs>();
   CLI::App* cmd =
       app.add_subcommand("precompute", "Mesh (OBJ/OFF/PLY/STL) to modal soundbank (.chbank)");
@@ -295,7 +295,9 @@ void add_precompute(CLI::App& app) {
                ? std::string()
                : std::string("expected 32 hex digits");
   });
-  cmd->callback([a] { run_precompute(*a); });
+  cmd->callback([a, run] {  // `a` lives as long as the parser that fills it
+    if (run) run_precompute(*a);
+  });
 }
 
 void add_materials(CLI::App& app) {

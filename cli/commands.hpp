@@ -53,7 +53,8 @@ struct ExitCode {
 void add_render(CLI::App& app);
 void add_bench(CLI::App& app);
 void add_devices(CLI::App& app);
-void add_precompute(CLI::App& app);
+/// `run` false: parse and check the options only (the batch checks its manifests so).
+void add_precompute(CLI::App& app, bool run = true);
 void add_materials(CLI::App& app);
 void add_info(CLI::App& app);
 void add_radiate(CLI::App& app);

@@ -173,14 +173,14 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
            std::to_string(std::llround(est.flops / 1e9)) + " GFLOP)");
   if (o.max_memory > 0 && est.bytes + r.basis_bytes > o.max_memory)
     throw BudgetError("the eigen-solve would need about " + gigabytes(est.bytes + r.basis_bytes) +
-                     " (the sparse factor of K - sigma M for " + std::to_string(n) +
-                     " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " +
-                     std::to_string(std::llround(est.entries)) + ", " +
-                     std::to_string(std::llround(est.flops / 1e9)) +
-                     " GFLOP; the Lanczos basis: " + gigabytes(r.basis_bytes) +
-                     "), more than the memory budget of " + gigabytes(o.max_memory) +
-                     ": raise --max-tet-volume (coarser elements), lower --max-freq or "
-                     "--max-modes, or raise --max-memory");
+                      " (the sparse factor of K - sigma M for " + std::to_string(n) +
+                      " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " +
+                      std::to_string(std::llround(est.entries)) + ", " +
+                      std::to_string(std::llround(est.flops / 1e9)) +
+                      " GFLOP; the Lanczos basis: " + gigabytes(r.basis_bytes) +
+                      "), more than the memory budget of " + gigabytes(o.max_memory) +
+                      ": raise --max-tet-volume (coarser elements), lower --max-freq or "
+                      "--max-modes, or raise --max-memory");
   // Round-off on a badly shaped mesh can make K - sigma M indefinite along the rigid motions
   // when |sigma| is tiny next to K's scale: move the shift further down and retry.
   for (int attempt = 0;; ++attempt) {
