@@ -368,3 +368,19 @@ TEST(BatchMpi, TwoAndThreeRanksShareTheAssets) {
   }
 }
 #endif
+
+// The shipped manifests stay valid: a dry run reads them, checks every asset's options and
+// plans, writing nothing.
+TEST(BatchCli, ShippedManifestsAreValid) {
+  for (const char* m : {"/examples/batch/bundled.json", "/bench/batch_bundled.json"}) {
+    const chladni::test::CliResult r =
+        run_cli("batch " + std::string(CHLADNI_SOURCE_DIR) + m + " --dry-run -o " +
+                chladni::test::temp_path("chladni_batch_dry_" + std::to_string(::getpid())));
+    EXPECT_EQ(r.code, 0) << m << "\n" << r.output;
+    EXPECT_NE(r.output.find("teapot_solid_selfintersecting  pending"), std::string::npos)
+        << r.output;
+    EXPECT_NE(r.output.find("spot "), std::string::npos) << r.output;
+    EXPECT_FALSE(
+        fs::exists(chladni::test::temp_path("chladni_batch_dry_" + std::to_string(::getpid()))));
+  }
+}
