@@ -80,7 +80,9 @@ void run_batch_command(const BatchArgs& a) {
     }
     bool root = true;
     s = batch::run_batch_mpi(m, error, o, root);
-    if (!root) throw ExitCode{s.exit_code()};
+    // The other ranks exit 0: a non-zero exit makes mpirun abort the job, rank 0 too, which may
+    // not have written the summary yet. mpirun's exit code is then rank 0's.
+    if (!root) return;
   } else {
     m = batch::read_manifest(a.manifest, a.output_dir, precompute_schema());
     const std::string summary =
