@@ -27,16 +27,16 @@ struct BatchArgs {
 // The precompute command's own parser decides what a manifest may say.
 batch::OptionSchema precompute_schema() {
   batch::OptionSchema s;
-  s.kind = [](const std::string& name) {
-    CLI::App app;
-    add_precompute(app, false);
-    const CLI::Option* opt = app.get_subcommand("precompute")->get_option_no_throw("--" + name);
+  auto app = std::make_shared<CLI::App>();  // asked about every option of every asset
+  add_precompute(*app, false);
+  s.kind = [app](const std::string& name) {
+    const CLI::Option* opt = app->get_subcommand("precompute")->get_option_no_throw("--" + name);
     if (!opt || opt->get_group().empty()) return batch::OptionSchema::Unknown;
     return opt->get_items_expected_min() == 0 ? batch::OptionSchema::Flag
                                               : batch::OptionSchema::Value;
   };
   s.check = [](const std::vector<std::string>& args) {
-    CLI::App app;
+    CLI::App app;  // a fresh parser per asset: parsing fills it
     add_precompute(app, false);
     CLI::App* cmd = app.get_subcommand("precompute");
     std::vector<std::string> reversed{args.rbegin(), args.rend()};
@@ -53,6 +53,10 @@ batch::OptionSchema precompute_schema() {
       (void)DampingModel::parse(d->as<std::string>());
   };
   return s;
+}
+
+std::string summary_path(const BatchArgs& a, const batch::Manifest& m) {
+  return a.summary.empty() ? (fs::path(m.output_dir) / "batch-summary.json").string() : a.summary;
 }
 
 void run_batch_command(const BatchArgs& a) {
@@ -85,17 +89,14 @@ void run_batch_command(const BatchArgs& a) {
     if (!root) return;
   } else {
     m = batch::read_manifest(a.manifest, a.output_dir, precompute_schema());
-    const std::string summary =
-        a.summary.empty() ? (fs::path(m.output_dir) / "batch-summary.json").string() : a.summary;
     if (!a.dry_run) {
       std::error_code ec;
       if (a.summary.empty()) fs::create_directories(m.output_dir, ec);
-      check_output_path(summary, "--summary");
+      check_output_path(summary_path(a, m), "--summary");
     }
     s = batch::run_batch(m, o);
   }
-  const std::string summary =
-      a.summary.empty() ? (fs::path(m.output_dir) / "batch-summary.json").string() : a.summary;
+  const std::string summary = summary_path(a, m);
   if (!a.quiet) std::printf("%s", batch::summary_table(s).c_str());
   if (!a.dry_run) {
     write_file_atomic(summary, batch::summary_json(m, s), "--summary");

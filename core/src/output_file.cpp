@@ -27,6 +27,19 @@ std::string temporary_path(const std::string& path) {
   return path + ".tmp" + std::to_string(::getpid());
 }
 
+void remove_stale_temporaries(const std::string& path) {
+  const fs::path out(path);
+  const fs::path dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
+  const std::string prefix = out.filename().string() + ".tmp";
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() > prefix.size() && name.rfind(prefix, 0) == 0 &&
+        name.find_first_not_of("0123456789", prefix.size()) == std::string::npos)
+      fs::remove(e.path(), ec);
+  }
+}
+
 void commit_temporary(const std::string& tmp, const std::string& path, const std::string& what) {
   std::error_code ec;
   fs::rename(tmp, path, ec);

@@ -6,7 +6,6 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -20,10 +19,6 @@ extern char** environ;
 namespace chladni::precompute::batch {
 
 namespace {
-
-bool has_arg(const std::vector<std::string>& args, const std::string& name) {
-  return std::find(args.begin(), args.end(), name) != args.end();
-}
 
 std::string gigabytes(double bytes) {
   char buf[32];
@@ -55,9 +50,8 @@ Child start_child(const RunOptions& o, const std::string& log_dir, const Asset& 
   ::unlink(c.json.c_str());  // a stale summary must not pass for this run's
   std::vector<std::string> args{o.exe, "precompute", a.mesh, "-o", a.output};
   args.insert(args.end(), a.args.begin(), a.args.end());
-  if (!a.sets_memory) args.insert(args.end(), {"--max-memory", gigabytes(memory)});
-  if (!has_arg(a.args, "--threads"))
-    args.insert(args.end(), {"--threads", std::to_string(threads)});
+  if (!a.has_option("--max-memory")) args.insert(args.end(), {"--max-memory", gigabytes(memory)});
+  if (!a.has_option("--threads")) args.insert(args.end(), {"--threads", std::to_string(threads)});
   args.insert(args.end(), {"--json", c.json});
   if (!stamp.empty()) args.insert(args.end(), {"--batch-stamp", stamp});
 

@@ -2,6 +2,7 @@
 // to mesh and soundbank paths, with every problem named by file and JSON path or CSV line.
 #include <glob.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <map>
 #include <optional>
@@ -171,7 +172,6 @@ std::vector<Asset> resolve_entries(const std::vector<Entry>& entries, const fs::
       a.output = e.output.empty() ? resolve(output_dir, a.name + ".chbank")
                                   : resolve(output_dir, e.output);
       a.args = to_args(e.options);
-      a.sets_memory = e.options.count("max-memory") > 0;
       try {
         std::vector<std::string> full{a.mesh, "-o", a.output};
         full.insert(full.end(), a.args.begin(), a.args.end());
@@ -196,6 +196,10 @@ std::vector<Asset> resolve_entries(const std::vector<Entry>& entries, const fs::
 }
 
 }  // namespace
+
+bool Asset::has_option(const std::string& option) const {
+  return std::find(args.begin(), args.end(), option) != args.end();
+}
 
 Manifest read_manifest(const std::string& path, const std::string& output_dir,
                        const OptionSchema& schema) {

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "chladni/precompute/eigensolve.hpp"
 
 namespace chladni::precompute::batch {
@@ -13,20 +14,6 @@ namespace chladni::precompute::batch {
 namespace fs = std::filesystem;
 
 namespace {
-
-// Temporaries a killed precompute left beside `output` (core's temporary_path: OUTPUT.tmpPID).
-void remove_stale_temporaries(const std::string& output) {
-  const fs::path out(output);
-  const fs::path dir = out.parent_path().empty() ? fs::path(".") : out.parent_path();
-  const std::string prefix = out.filename().string() + ".tmp";
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.size() > prefix.size() && name.rfind(prefix, 0) == 0 &&
-        name.find_first_not_of("0123456789", prefix.size()) == std::string::npos)
-      fs::remove(e.path(), ec);
-  }
-}
 
 std::string duration_text(double s) {
   char buf[32];
@@ -118,7 +105,8 @@ std::vector<std::pair<std::size_t, Result>> Runner::reap(bool block) {
 
 bool Runner::requeue_alone(std::size_t asset, const Result& r,
                            std::deque<std::size_t>& alone) const {
-  if (r.status != Status::OverBudget || std::max(1, o_.jobs) <= 1 || m_.assets[asset].sets_memory)
+  if (r.status != Status::OverBudget || std::max(1, o_.jobs) <= 1 ||
+      m_.assets[asset].has_option("--max-memory"))
     return false;
   if (o_.print) o_.print("over budget " + r.name + ": will retry alone at the end");
   alone.push_back(asset);

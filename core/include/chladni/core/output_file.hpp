@@ -17,6 +17,10 @@ void write_file_atomic(const std::string& path, std::string_view bytes, const st
 /// The temporary name write_file_atomic and the other atomic writers use for `path`.
 std::string temporary_path(const std::string& path);
 
+/// Removes the temporaries (temporary_path's names, any PID) that killed writers left beside
+/// `path`; errors are ignored.
+void remove_stale_temporaries(const std::string& path);
+
 /// Renames `tmp` over `path`, or removes `tmp` and throws InputError naming `what`.
 void commit_temporary(const std::string& tmp, const std::string& path, const std::string& what);
 

@@ -16,7 +16,8 @@ struct Asset {
   std::vector<std::string> args;  ///< precompute options, e.g. {"--material", "brass"}
   std::string where;              ///< "MANIFEST: assets[3]" or "MANIFEST:7", for messages
   std::uint64_t cost = 0;         ///< scheduling weight: the mesh file's size in bytes
-  bool sets_memory = false;       ///< the manifest gives --max-memory itself
+  /// The manifest gives this option (e.g. "--max-memory") itself.
+  bool has_option(const std::string& option) const;
 };
 
 struct Manifest {
