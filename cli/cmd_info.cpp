@@ -23,7 +23,7 @@ void run_info(const InfoArgs& a) {
   nlohmann::json meta = nlohmann::json::parse(b.metadata_json, nullptr, false);
   if (meta.is_discarded()) meta = b.metadata_json;
   const double ln1000 = std::log(1000.0);
-  // Per-mode frequency error estimates from a sizing pass (precompute --max-modes), if any.
+  // Per-mode frequency error estimates (precompute's a-posteriori estimate), if recorded.
   std::vector<double> ferr;
   if (meta.is_object() && meta.contains("frequency_error_estimate") &&
       meta["frequency_error_estimate"].is_array() &&
@@ -125,7 +125,9 @@ void run_info(const InfoArgs& a) {
       if (k != "frequency_error_estimate" || ferr.empty())
         std::printf("meta      %s: %s\n", k.c_str(), v.dump().c_str());
   if (!ferr.empty())
-    std::printf("          f. err = how far the mode moved from the sizing pass's coarse mesh\n");
+    std::printf(
+        "          f. err = estimated relative frequency error of the elements (precompute "
+        "--tolerance)\n");
   std::printf("%zu modes\n%6s %12s %12s %12s %10s %10s", b.mode_count(), "mode", "freq (Hz)",
               "decay (1/s)", "damp. ratio", "T60 (s)", "residual");
   if (!ferr.empty()) std::printf(" %8s", "f. err");

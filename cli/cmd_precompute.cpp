@@ -23,7 +23,7 @@ struct PrecomputeArgs {
   std::string mesh, output, save_surface, unit = "m", material = "steel", damping,
                                           mass = "consistent", json_path;
   double scale = 1, E = NAN, nu = NAN, rho = NAN, max_freq = 20000, sample_rate = 48000;
-  double max_tet_volume = 0;
+  double max_tet_volume = 0, tolerance = 0.01;
   double max_memory_gb = -1;  // negative: 80 % of the memory available
   int order = 2, threads = 0;
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
@@ -54,7 +54,6 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                       {"nonzeros", r.nonzeros},
                       {"element_order", a.order},
                       {"max_tet_volume_m3", r.max_tet_volume},
-                      {"sizing_frequency_hz", r.sizing_frequency},
                       {"max_radius_edge", r.quality.max_radius_edge},
                       {"mean_radius_edge", r.quality.mean_radius_edge},
                       {"min_dihedral_deg", r.quality.min_dihedral_deg}};
@@ -77,12 +76,17 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                 {"overdamped", r.overdamped},
                 {"below_band", r.below_band},
                 {"above_band", r.above_band}};
-  if (!r.frequency_error.empty()) {
-    nlohmann::json e = nlohmann::json::array();
-    for (double x : r.frequency_error)
-      e.push_back(std::isfinite(x) ? nlohmann::json(x) : nlohmann::json(nullptr));
-    j["frequency_error_estimate"] = e;
-  }
+  j["frequency_error_estimate"] = r.frequency_error;
+  nlohmann::json passes = nlohmann::json::array();
+  for (const auto& m : r.passes)
+    passes.push_back({{"tetrahedra", m.tets},
+                      {"dofs", m.dofs},
+                      {"worst_error", m.worst_error},
+                      {"seconds", m.seconds}});
+  j["accuracy"] = {{"tolerance", a.tolerance},
+                   {"converged", r.converged},
+                   {"reason", r.unconverged_reason},
+                   {"meshes", passes}};
   nlohmann::json freqs = nlohmann::json::array();
   for (double w : bank.omega) freqs.push_back(w / (2 * std::numbers::pi));
   j["frequencies_hz"] = freqs;
@@ -134,6 +138,7 @@ void run_precompute(const PrecomputeArgs& a) {
   o.max_frequency = a.max_freq;
   o.sample_rate = a.sample_rate;
   o.max_tet_volume = a.max_tet_volume;
+  o.tolerance = a.tolerance;
   o.max_memory = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
   o.threads = a.threads;
   o.mode_cap = std::max(a.mode_cap, a.max_modes);
@@ -179,6 +184,15 @@ void run_precompute(const PrecomputeArgs& a) {
   std::printf("eigen-solve (%s): %zu rigid modes removed, %zu elastic modes, max residual %.2g%s\n",
               r.eigen.factorization.c_str(), r.eigen.rigid_removed, r.computed, r.max_residual,
               r.eigen.capped ? " (stopped at --mode-cap before --max-freq)" : "");
+  if (!r.passes.empty()) {
+    double worst_kept = 0;
+    for (double x : r.frequency_error) worst_kept = std::max(worst_kept, x);
+    std::printf(
+        "accuracy: largest estimated frequency error %.2g %% (tolerance %.2g %%) after %zu "
+        "mesh%s%s%s\n",
+        100 * worst_kept, 100 * a.tolerance, r.passes.size(), r.passes.size() == 1 ? "" : "es",
+        r.converged ? "" : "; not converged: ", r.converged ? "" : r.unconverged_reason.c_str());
+  }
   std::printf("modes kept %zu; dropped: %zu overdamped, %zu below 20 Hz, %zu above %.0f Hz\n",
               r.kept, r.overdamped, r.below_band, r.above_band,
               std::min(a.max_freq, a.sample_rate / 2));
@@ -239,9 +253,14 @@ void add_precompute(CLI::App& app, bool run) {
       ->check(finite_in(8000, 384000))
       ->capture_default_str();
   cmd->add_option("--max-tet-volume", a->max_tet_volume,
-                  "Largest tetrahedron (m^3; 0: from --max-freq, or with --max-modes N from "
-                  "the N-th frequency a sizing pass on a coarse mesh finds)")
+                  "Largest tetrahedron (m^3; 0: chosen by the solver, refining until the modes "
+                  "asked for are within --tolerance)")
       ->check(finite_in(0, 1e6));
+  cmd->add_option("--tolerance", a->tolerance,
+                  "Target relative frequency error of every mode asked for, by the error "
+                  "estimate; the mesh is refined where it asks (at most 4 meshes)")
+      ->check(finite_in(1e-4, 0.5))
+      ->capture_default_str();
   cmd->add_option("--max-memory", a->max_memory_gb,
                   "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "
                   "80 % of the memory available): larger problems are refused before the "

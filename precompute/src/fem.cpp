@@ -11,14 +11,11 @@
 #include <unordered_map>
 
 #include "chladni/core/error.hpp"
+#include "fem_element.hpp"
 
 namespace chladni::precompute {
-namespace {
+namespace detail {
 
-// Edge order of the quadratic tet's mid-edge nodes 4..9.
-constexpr int kEdges[6][2] = {{0, 1}, {1, 2}, {0, 2}, {0, 3}, {1, 3}, {2, 3}};
-
-// Gradients of the barycentric coordinates L0..L3 (constant on a straight-sided tet) and volume.
 double barycentric_gradients(const Vec3 x[4], Eigen::Matrix<double, 4, 3>& g) {
   Eigen::Matrix3d J;
   for (int k = 0; k < 3; ++k)
@@ -31,6 +28,42 @@ double barycentric_gradients(const Vec3 x[4], Eigen::Matrix<double, 4, 3>& g) {
   g.row(0) = -(g.row(1) + g.row(2) + g.row(3));
   return det / 6;
 }
+
+// Scalar P2 mass matrix on the unit-volume tet, exact: integral of L^a = 6V a!b!c!d!/(a+b+c+d+3)!
+// gives (1/420) [corner diag 6, corner-corner 1, corner-edge -4 (edge at the corner) or -6,
+// edge diag 32, edges sharing a corner 16, opposite edges 8].
+const Eigen::Matrix<double, 10, 10>& p2_unit_mass() {
+  static const Eigen::Matrix<double, 10, 10> unit = [] {
+    Eigen::Matrix<double, 10, 10> m;
+    for (int a = 0; a < 10; ++a)
+      for (int b = 0; b < 10; ++b) {
+        double v;
+        if (a < 4 && b < 4) {
+          v = a == b ? 6 : 1;
+        } else if (a >= 4 && b >= 4) {
+          const auto& ea = kEdges[a - 4];
+          const auto& eb = kEdges[b - 4];
+          const int shared =
+              (ea[0] == eb[0]) + (ea[0] == eb[1]) + (ea[1] == eb[0]) + (ea[1] == eb[1]);
+          v = a == b ? 32 : shared ? 16 : 8;
+        } else {
+          const int c = a < 4 ? a : b;
+          const auto& e = kEdges[(a < 4 ? b : a) - 4];
+          v = (e[0] == c || e[1] == c) ? -4 : -6;
+        }
+        m(a, b) = v / 420.0;
+      }
+    return m;
+  }();
+  return unit;
+}
+
+}  // namespace detail
+
+namespace {
+
+using detail::barycentric_gradients;
+using detail::kEdges;
 
 // K_(a,i),(b,j) += w (lambda g_a,i g_b,j + mu g_a,j g_b,i + mu delta_ij g_a . g_b): the Hessian
 // of the strain energy density lambda/2 (div u)^2 + mu eps:eps for u = sum_b u_b N_b.
@@ -53,32 +86,6 @@ void expand_mass(const Eigen::Matrix<double, N, N>& m, Eigen::Matrix<double, 3 *
   for (int a = 0; a < N; ++a)
     for (int b = 0; b < N; ++b)
       for (int i = 0; i < 3; ++i) M(3 * a + i, 3 * b + i) = m(a, b);
-}
-
-// Scalar P2 mass matrix on the unit-volume tet, exact: integral of L^a = 6V a!b!c!d!/(a+b+c+d+3)!
-// gives (1/420) [corner diag 6, corner-corner 1, corner-edge -4 (edge at the corner) or -6,
-// edge diag 32, edges sharing a corner 16, opposite edges 8].
-Eigen::Matrix<double, 10, 10> p2_unit_mass() {
-  Eigen::Matrix<double, 10, 10> m;
-  for (int a = 0; a < 10; ++a)
-    for (int b = 0; b < 10; ++b) {
-      double v;
-      if (a < 4 && b < 4) {
-        v = a == b ? 6 : 1;
-      } else if (a >= 4 && b >= 4) {
-        const auto& ea = kEdges[a - 4];
-        const auto& eb = kEdges[b - 4];
-        const int shared =
-            (ea[0] == eb[0]) + (ea[0] == eb[1]) + (ea[1] == eb[0]) + (ea[1] == eb[1]);
-        v = a == b ? 32 : shared ? 16 : 8;
-      } else {
-        const int c = a < 4 ? a : b;
-        const auto& e = kEdges[(a < 4 ? b : a) - 4];
-        v = (e[0] == c || e[1] == c) ? -4 : -6;
-      }
-      m(a, b) = v / 420.0;
-    }
-  return m;
 }
 
 }  // namespace
@@ -111,7 +118,7 @@ void p2_element(const Vec3 x[4], double lambda, double mu, double rho, Mat30& K,
     }
     add_stiffness<10>(G, V / 4, lambda, mu, K);
   }
-  static const Eigen::Matrix<double, 10, 10> unit = p2_unit_mass();
+  const Eigen::Matrix<double, 10, 10>& unit = detail::p2_unit_mass();
   const Eigen::Matrix<double, 10, 10> m = rho * V * unit;
   expand_mass<10>(m, M);
 }

@@ -1,5 +1,6 @@
 #include "chladni/precompute/precompute.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <nlohmann/json.hpp>
@@ -8,6 +9,8 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/version.hpp"
+#include "chladni/precompute/mode_error.hpp"
+#include "surface_sample.hpp"
 
 namespace chladni::precompute {
 namespace {
@@ -23,8 +26,13 @@ class Stopwatch {
   }
   void stop() {
     if (name_.empty()) return;
-    r_.stages.push_back(
-        {name_, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count()});
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
+    auto it = std::find_if(r_.stages.begin(), r_.stages.end(),
+                           [&](const StageTime& s) { return s.name == name_; });
+    if (it == r_.stages.end())
+      r_.stages.push_back({name_, dt});
+    else
+      it->seconds += dt;  // a stage repeated on a refined mesh
     name_.clear();
   }
 
@@ -35,39 +43,136 @@ class Stopwatch {
   std::chrono::steady_clock::time_point t0_;
 };
 
-// One FEM solve: tetrahedralize at `volume`, assemble, find the modes. `sw`, when given, times
-// the three stages separately (the final pass); the sizing pass is timed as one.
+// One FEM solve on `tets`: assemble, find the modes, estimate their errors.
 struct FemPass {
-  SurfaceMesh surface;  // the tet mesh's boundary (TetGen may split surface edges)
+  TetMesh tets;
   TetQuality quality;
-  std::size_t tets = 0, nodes = 0, dofs = 0, nonzeros = 0;
-  std::size_t corner_nodes = 0;  // the tet mesh's own vertices (before P2 midside nodes)
+  std::size_t nodes = 0, dofs = 0, nonzeros = 0;
   EigenResult eigen;
+  ModeErrors errors;
 };
 
-TetMesh tets_for(const SurfaceMesh& in, double volume, const PrecomputeOptions& o) {
-  TetOptions topt = o.tet;
-  topt.max_volume = volume;
-  return tetrahedralize(in, topt);
-}
-
-FemPass fem_pass(const TetMesh& tets, const PrecomputeOptions& o, const EigenOptions& eo,
-                 const Progress& p, Stopwatch* sw = nullptr) {
+FemPass fem_pass(TetMesh tets, const PrecomputeOptions& o, const EigenOptions& eo,
+                 const Progress& p, Stopwatch& sw) {
   FemPass f;
   f.quality = tet_quality(tets);
-  f.tets = tets.tets.size();
-  f.corner_nodes = tets.nodes.size();
-  f.surface.vertices.assign(tets.nodes.begin(), tets.nodes.begin() + tets.surface_vertices);
-  f.surface.triangles = tets.surface_triangles;
-  if (sw) sw->start("assemble");
+  sw.start("assemble");
   const FemMesh fem = make_fem_mesh(tets, o.order);
+  f.tets = std::move(tets);
   f.nodes = fem.nodes.size();
   f.dofs = fem.dofs();
   FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
   f.nonzeros = std::size_t(km.K.nonZeros());
-  if (sw) sw->start("eigen-solve");
+  sw.start("eigen-solve");
   f.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
+  sw.start("error estimate");
+  f.errors = estimate_mode_errors(fem, o.material, f.eigen, o.threads);
   return f;
+}
+
+// The modes the estimate must bring within tolerance: those asked for, in the band.
+double worst_error(const FemPass& f, const PrecomputeOptions& o) {
+  double worst = 0;
+  for (std::size_t i = 0; i < f.eigen.lambda.size(); ++i) {
+    const double hz = std::sqrt(std::max(f.eigen.lambda[i], 0.0)) / (2 * std::numbers::pi);
+    if (hz >= o.min_frequency && hz <= o.max_frequency)
+      worst = std::max(worst, f.errors.relative[i]);
+  }
+  return worst;
+}
+
+// The largest tet volume for the next mesh. An element of order p shrunk by s keeps about
+// s^(2p) of its error (energy error ~ h^p; Zienkiewicz & Zhu 1987), so the edge length where
+// the worst mode's error lies (the error-weighted mean edge) shrinks by the factor that brings
+// that mode to half the tolerance, by at most 2 at a time.
+double refined_volume(const FemPass& f, double worst, const PrecomputeOptions& o) {
+  const TetMesh& m = f.tets;
+  double weighted = 0, weight = 0;
+  for (std::size_t e = 0; e < m.tets.size(); ++e) {
+    const auto& t = m.tets[e];
+    const Vec3 &a = m.nodes[t[0]], &b = m.nodes[t[1]], &c = m.nodes[t[2]], &d = m.nodes[t[3]];
+    const double v = std::abs(dot(cross(sub(b, a), sub(c, a)), sub(d, a))) / 6;
+    weighted += f.errors.element[e] * std::cbrt(6 * std::numbers::sqrt2 * v);  // regular edge
+    weight += f.errors.element[e];
+  }
+  const double h = weighted / weight;
+  const double s = std::clamp(std::pow(0.5 * o.tolerance / worst, 1.0 / (2.0 * o.order)), 0.5, 0.9);
+  return std::pow(s * h, 3) / (6 * std::numbers::sqrt2);
+}
+
+std::string percent(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2g %%", 100 * x);
+  return buf;
+}
+
+// Meshes the solid, solves, and refines where the estimate asks until the modes asked for are
+// within o.tolerance, o.max_passes meshes or the memory budget allow.
+// `first` receives the first mesh's boundary: the surface the soundbank keeps.
+FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& o,
+                           const EigenOptions& eo, const Progress& p, Stopwatch& sw,
+                           PrecomputeReport& r, SurfaceMesh& first) {
+  const bool chosen = o.max_tet_volume > 0;
+  double volume = o.max_tet_volume;
+  if (!chosen)
+    volume = o.max_modes > 0 ? coarse_max_volume(surface)
+                             : auto_max_volume(o.material, o.max_frequency, o.order, surface);
+  r.max_tet_volume = volume;
+  TetOptions topt = o.tet;
+  topt.max_volume = volume;
+  sw.start("tetrahedralize");
+  TetMesh tets = tetrahedralize(surface, topt);
+  first.vertices.assign(tets.nodes.begin(),
+                        tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
+  first.triangles = tets.surface_triangles;
+  std::optional<FemPass> best;
+  for (int pass = 1;; ++pass) {
+    const auto t0 = std::chrono::steady_clock::now();
+    FemPass f;
+    try {
+      f = fem_pass(std::move(tets), o, eo, p, sw);
+    } catch (const BudgetError& e) {
+      if (!best) throw;
+      r.converged = false;
+      r.unconverged_reason = std::string("the next refinement does not fit: ") + e.what();
+      break;
+    }
+    const double worst = worst_error(f, o);
+    r.passes.push_back(
+        {f.tets.tets.size(), f.dofs, worst,
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
+    if (p.note)
+      p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
+             " tetrahedra, largest estimated frequency error " + percent(worst));
+    best = std::move(f);
+    if (worst <= o.tolerance) {
+      r.converged = true;
+      break;
+    }
+    r.converged = false;
+    if (chosen) {
+      r.unconverged_reason = "--max-tet-volume fixes the elements";
+      break;
+    }
+    if (pass >= o.max_passes) {
+      r.unconverged_reason = std::to_string(pass) + " meshes solved";
+      break;
+    }
+    sw.start("tetrahedralize");
+    topt.max_volume = std::min(topt.max_volume, refined_volume(*best, worst, o));
+    r.max_tet_volume = topt.max_volume;
+    try {
+      tets = tetrahedralize(surface, topt);
+    } catch (const InputError& e) {  // e.g. more tets than this tool meshes
+      r.unconverged_reason = std::string("the next refinement does not fit: ") + e.what();
+      break;
+    }
+  }
+  if (!r.converged && p.note)
+    p.note("warning: the largest estimated frequency error is " +
+           percent(r.passes.back().worst_error) + ", above --tolerance " + percent(o.tolerance) +
+           " (" + r.unconverged_reason + ")");
+  return std::move(*best);
 }
 
 }  // namespace
@@ -133,67 +238,17 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   eo.mode_cap = o.mode_cap;
   eo.method = o.eigensolver;
   eo.max_memory = o.max_memory < 0 ? default_memory_budget() : o.max_memory;
-  // With --max-modes and no element size given, the size comes from the modes asked for: a
-  // solve on the coarsest quality mesh the bounding box allows estimates the N-th frequency
-  // (coarse elements are stiff, so it errs high: the safe side), and the elements are sized
-  // from 1.2 times that instead of from --max-freq.
-  double volume = o.max_tet_volume;
-  const double coarse = coarse_max_volume(surface);
-  std::optional<FemPass> sizing;
-  if (volume <= 0) {
-    volume = auto_max_volume(o.material, o.max_frequency, o.order, surface);
-    if (o.max_modes > 0 && coarse > volume) {
-      sw.start("sizing pass");
-      if (p.note)
-        p.note("sizing pass: the first " + std::to_string(o.max_modes) + " modes on a coarse mesh");
-      sizing = fem_pass(tets_for(surface, coarse, o), o, eo, p);
-      r.sizing_frequency =
-          std::sqrt(std::max(sizing->eigen.lambda.back(), 0.0)) / (2 * std::numbers::pi);
-      // (At most `coarse`: auto_max_volume is bounded by it.)
-      volume = auto_max_volume(o.material, std::min(o.max_frequency, 1.2 * r.sizing_frequency),
-                               o.order, surface);
-      if (p.note)
-        p.note("sizing pass: mode " + std::to_string(o.max_modes) + " near " +
-               std::to_string(int(r.sizing_frequency)) + " Hz; elements sized for " +
-               std::to_string(int(std::min(o.max_frequency, 1.2 * r.sizing_frequency))) + " Hz");
-    }
-  }
-  r.max_tet_volume = volume;
-  FemPass fp;
-  std::optional<TetMesh> tets;
-  if (!sizing || volume < coarse) {
-    sw.start("tetrahedralize");
-    tets = tets_for(surface, volume, o);
-  }
-  // The coarse mesh already resolves the modes asked for when the sizing asks for nothing finer,
-  // or when the surface alone decides the elements (TetGen returns the same mesh).
-  const bool reuse =
-      sizing &&
-      (!tets || (tets->tets.size() == sizing->tets && tets->nodes.size() == sizing->corner_nodes));
-  if (reuse) {
-    fp = std::move(*sizing);
-  } else {
-    fp = fem_pass(*tets, o, eo, p, &sw);
-  }
-  // The sizing pass and the final mesh form a coarser/finer pair: how far each mode moved
-  // between them estimates the coarser one's error, and bounds the finer one's while the
-  // elements converge (quadratic elements: the error falls with h^4).
-  std::vector<double> moved;
-  if (sizing && !reuse) {
-    const std::size_t n = std::min(sizing->eigen.lambda.size(), fp.eigen.lambda.size());
-    for (std::size_t i = 0; i < n; ++i) {
-      const double fc = std::sqrt(std::max(sizing->eigen.lambda[i], 0.0));
-      const double ff = std::sqrt(std::max(fp.eigen.lambda[i], 0.0));
-      moved.push_back(ff > 0 ? std::abs(fc - ff) / ff : 0.0);
-    }
-  }
+  if (!(o.tolerance > 0 && o.tolerance < 1)) throw InputError("--tolerance must lie in (0, 1)");
+  SurfaceMesh first;
+  FemPass fp = solve_to_tolerance(surface, o, eo, p, sw, r, first);
   r.quality = fp.quality;
-  r.tets = fp.tets;
+  r.tets = fp.tets.tets.size();
   r.nodes = fp.nodes;
   r.dofs = fp.dofs;
   r.nonzeros = fp.nonzeros;
   r.eigen = std::move(fp.eigen);
-  surface = std::move(fp.surface);
+  const Eigen::MatrixXd shapes = sample_on_surface(fp.tets, r.eigen.vectors, first);
+  surface = std::move(first);
   r.computed = r.eigen.lambda.size();
   for (double res : r.eigen.residual) r.max_residual = std::max(r.max_residual, res);
 
@@ -215,8 +270,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
                      " overdamped): check --unit/--scale, the material, or raise --max-freq");
   }
 
-  if (!moved.empty())
-    for (std::size_t i : sel.kept) r.frequency_error.push_back(i < moved.size() ? moved[i] : NAN);
+  for (std::size_t i : sel.kept) r.frequency_error.push_back(fp.errors.relative[i]);
 
   Soundbank bank;
   bank.material = o.material;
@@ -229,7 +283,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
     bank.omega.push_back(model.omega[i]);
     bank.decay.push_back(model.decay[i]);
     bank.residual.push_back(float(r.eigen.residual[i]));
-    const auto col = r.eigen.vectors.col(Eigen::Index(i));
+    const auto col = shapes.col(Eigen::Index(i));
     for (std::size_t v = 0; v < nv; ++v)
       for (int k = 0; k < 3; ++k) bank.shapes.push_back(float(col(Eigen::Index(3 * v + k))));
   }
@@ -267,7 +321,8 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   meta["tetrahedra"] = r.tets;
   meta["nodes"] = r.nodes;
   meta["max_tet_volume_m3"] = r.max_tet_volume;
-  if (r.sizing_frequency > 0) meta["sizing_frequency_hz"] = r.sizing_frequency;
+  meta["tolerance"] = o.tolerance;
+  meta["converged"] = r.converged;
   if (!r.frequency_error.empty()) {
     nlohmann::json e = nlohmann::json::array();
     for (double x : r.frequency_error)

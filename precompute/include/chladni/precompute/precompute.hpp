@@ -25,9 +25,14 @@ struct PrecomputeOptions {
   double max_frequency = 20000;
   double min_frequency = 20;
   double sample_rate = 48000;  ///< damped frequencies above sample_rate / 2 are dropped
-  /// m^3; 0: from max_frequency (auto_max_volume), or with max_modes from the N-th frequency
-  /// a sizing pass on a coarse mesh finds (times 1.2, at most max_frequency).
+  /// m^3; 0: chosen by the solver: the first mesh is sized from max_frequency (auto_max_volume)
+  /// or, with max_modes, is the coarsest quality mesh (coarse_max_volume), and it is refined
+  /// where the error estimate asks until the modes asked for are within `tolerance`.
   double max_tet_volume = 0;
+  /// Target relative frequency error of every mode asked for, by the a-posteriori estimate
+  /// (mode_error.hpp).
+  double tolerance = 0.01;
+  int max_passes = 4;  ///< meshes solved at most while refining
   TetOptions tet;
   int threads = 0;
   std::size_t mode_cap = 2000;
@@ -52,11 +57,17 @@ struct PrecomputeReport {
   MeshReport mesh;
   std::vector<std::string> repairs;
   double max_tet_volume = 0;
-  /// With --max-modes: the N-th frequency found by the sizing pass on a coarse mesh (0: none).
-  double sizing_frequency = 0;
-  /// Per kept mode: |f - f_sizing| / f between the sizing pass and the final mesh (empty when
-  /// only one mesh was solved): the coarser mesh's error, and a bound on the finer one's.
+  /// Per kept mode: the estimated relative frequency error (f_h - f) / f of the final mesh.
   std::vector<double> frequency_error;
+  /// Each mesh solved, coarse to fine: its size and the largest estimate over the modes asked for.
+  struct MeshPass {
+    std::size_t tets = 0, dofs = 0;
+    double worst_error = 0;
+    double seconds = 0;
+  };
+  std::vector<MeshPass> passes;
+  bool converged = true;           ///< every mode asked for is within PrecomputeOptions::tolerance
+  std::string unconverged_reason;  ///< why refining stopped short, when it did
   std::size_t tets = 0, nodes = 0, dofs = 0, nonzeros = 0;
   TetQuality quality;
   EigenResult eigen;  ///< vectors are released after use

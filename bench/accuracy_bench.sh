@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Every bundled mesh in steel with --max-modes 100 and otherwise default settings
+# (docs/PERFORMANCE.md, "Precompute at defaults"): time, peak memory, the meshes the refinement
+# solved, the error estimate, and the first 20 modes against a reference solve refined further
+# (to a fifth of the default run's worst estimate over them).
+# Usage: bash bench/accuracy_bench.sh [path/to/chladni] [mesh names...]   (default: build/cli/chladni, all)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+chladni=${1:-build/cli/chladni}
+shift || true
+names=("$@")
+((${#names[@]})) || names=(bar bowl bell spot rotor pinion_gear coupling sphere)
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+echo "| mesh | meshes solved | tets | DOFs | modes kept | time (s) | peak RSS (MB) | worst estimate, 100 modes | worst estimate, first 20 | first 20 against the reference | reference tets |"
+echo "|---|---|---|---|---|---|---|---|---|---|---|"
+for name in "${names[@]}"; do
+  mesh=meshes/$name.obj
+  "$chladni" precompute "$mesh" --material steel --max-modes 100 --no-transfer -q \
+    -o "$out/d.chbank" --json "$out/d.json"
+  tol=$(python3 -c "import json,sys; e=json.load(open(sys.argv[1]))['frequency_error_estimate'][:20]; print(max(1e-4, max(e) / 5))" "$out/d.json")
+  "$chladni" precompute "$mesh" --material steel --max-modes 20 --no-transfer -q \
+    --tolerance "$tol" -o "$out/r.chbank" --json "$out/r.json"
+  python3 - "$name" "$out/d.json" "$out/r.json" <<'PY'
+import json, sys
+name, d, r = sys.argv[1], json.load(open(sys.argv[2])), json.load(open(sys.argv[3]))
+fd, fr, e = d["frequencies_hz"], r["frequencies_hz"], d["frequency_error_estimate"]
+n = min(20, len(fd), len(fr))
+actual = max(abs(fd[i] / fr[i] - 1) for i in range(n))
+v = d["volume_mesh"]
+print(f"| {name} | {len(d['accuracy']['meshes'])} | {v['tetrahedra']} | {v['dofs']} | {d['modes']['kept']} "
+      f"| {d['total_seconds']:.1f} | {d['peak_rss_mb']:.0f} | {100 * max(e):.2f} % | {100 * max(e[:20]):.2f} % "
+      f"| {100 * actual:.2f} % | {r['volume_mesh']['tetrahedra']} |", flush=True)
+PY
+done
