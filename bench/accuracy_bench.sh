@@ -2,7 +2,7 @@
 # Every bundled mesh in steel with --max-modes 100 and otherwise default settings
 # (docs/PERFORMANCE.md, "Precompute at defaults"): time, peak memory, the meshes the refinement
 # solved, the error estimate, and the first 20 modes against a reference solve refined further
-# (to a fifth of the default run's worst estimate over them).
+# (to a third of the default run's worst estimate over them).
 # Usage: bash bench/accuracy_bench.sh [path/to/chladni] [mesh names...]   (default: build/cli/chladni, all)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,7 +19,7 @@ for name in "${names[@]}"; do
   mesh=meshes/$name.obj
   "$chladni" precompute "$mesh" --material steel --max-modes 100 --no-transfer -q \
     -o "$out/d.chbank" --json "$out/d.json"
-  tol=$(python3 -c "import json,sys; e=json.load(open(sys.argv[1]))['frequency_error_estimate'][:20]; print(max(1e-4, max(e) / 5))" "$out/d.json")
+  tol=$(python3 -c "import json,sys; e=json.load(open(sys.argv[1]))['frequency_error_estimate'][:20]; print(max(1e-4, max(e) / 3))" "$out/d.json")
   "$chladni" precompute "$mesh" --material steel --max-modes 20 --no-transfer -q \
     --tolerance "$tol" -o "$out/r.chbank" --json "$out/r.json"
   python3 - "$name" "$out/d.json" "$out/r.json" <<'PY'

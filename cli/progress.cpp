@@ -6,7 +6,8 @@
 
 namespace chladni::cli {
 
-ProgressBar::ProgressBar(bool quiet) : enabled_(!quiet && isatty(STDERR_FILENO)) {}
+ProgressBar::ProgressBar(bool quiet)
+    : enabled_(!quiet && isatty(STDERR_FILENO)), plain_(!quiet && !enabled_) {}
 ProgressBar::~ProgressBar() {
   finish();
 }
@@ -16,6 +17,7 @@ void ProgressBar::stage(const std::string& name) {
   stage_ = name;
   ++index_;
   t0_ = std::chrono::steady_clock::now();
+  if (plain_) std::fprintf(stderr, "[%d] %s\n", index_, name.c_str());
   draw(-1);
 }
 
@@ -27,7 +29,10 @@ void ProgressBar::fraction(double f) {
 }
 
 void ProgressBar::note(const std::string& text) {
-  if (!enabled_) return;
+  if (!enabled_) {
+    if (plain_ || text.rfind("warning:", 0) == 0) std::fprintf(stderr, "  %s\n", text.c_str());
+    return;
+  }
   std::fprintf(stderr, "\r\033[K  %s\n", text.c_str());
   open_line_ = false;
   draw(-1);

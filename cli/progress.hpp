@@ -1,5 +1,6 @@
 #pragma once
-// Progress on stderr for long commands: a redrawn bar on a terminal, nothing otherwise.
+// Progress on stderr for long commands: a redrawn bar on a terminal, plain lines (each stage and
+// note) otherwise; warnings are printed even when quiet.
 #include <chrono>
 #include <string>
 
@@ -7,7 +8,7 @@ namespace chladni::cli {
 
 class ProgressBar {
  public:
-  /// enabled = !quiet && stderr is a terminal.
+  /// enabled (the bar) = !quiet && stderr is a terminal; plain lines when not a terminal.
   explicit ProgressBar(bool quiet);
   ~ProgressBar();
   void stage(const std::string& name);
@@ -18,7 +19,7 @@ class ProgressBar {
 
  private:
   void draw(double f);
-  bool enabled_;
+  bool enabled_, plain_;
   std::string stage_;
   int index_ = 0;
   std::chrono::steady_clock::time_point t0_, last_draw_;

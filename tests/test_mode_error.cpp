@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "../precompute/src/surface_sample.hpp"
+#include "chladni/core/error.hpp"
 #include "chladni/precompute/mode_error.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "fem_fixtures.hpp"
@@ -166,4 +167,73 @@ TEST(SurfaceSample, InterpolatesOnTheBoundary) {
     const Vec3 u = linear(other.vertices[n]);
     for (int k = 0; k < 3; ++k) EXPECT_NEAR(s(Eigen::Index(3 * n + k), 0), u[k], 1e-12) << n;
   }
+}
+
+// Refinement stops at max_passes with the reason, and the bank keeps the first mesh's surface.
+TEST(ModeError, RefinementStopsShortWithTheReason) {
+  PrecomputeOptions o;
+  o.max_modes = 4;
+  o.transfer = false;
+  o.tolerance = 1e-4;  // more than two meshes can give
+  o.max_passes = 2;
+  PrecomputeReport r;
+  const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {4, 2, 2});
+  const Soundbank b = precompute_surface(box, "box", o, r);
+  PrecomputeOptions once = o;
+  once.tolerance = 0.5;
+  PrecomputeReport r1;
+  const Soundbank b1 = precompute_surface(box, "box", once, r1);
+  ASSERT_EQ(r1.passes.size(), 1u);
+  ASSERT_EQ(r.passes.size(), 2u);
+  EXPECT_GT(r.passes[1].tets, r.passes[0].tets);
+  EXPECT_LT(r.passes[1].worst_error, r.passes[0].worst_error);
+  EXPECT_FALSE(r.converged);
+  EXPECT_NE(r.unconverged_reason.find("2 meshes"), std::string::npos) << r.unconverged_reason;
+  EXPECT_NE(b.metadata_json.find("\"converged\":false"), std::string::npos);
+  EXPECT_EQ(b.vertices.size(), b1.vertices.size());
+  ASSERT_EQ(r.frequency_error.size(), 4u);
+  for (double e : r.frequency_error) EXPECT_GT(e, 0);
+}
+
+// A first mesh over the memory budget is coarsened until it fits (here the coarsest quality
+// mesh), with the cost stated by the estimate, instead of being refused.
+TEST(ModeError, FirstMeshOverTheBudgetIsCoarsened) {
+  PrecomputeOptions o;
+  o.transfer = false;
+  o.max_frequency = 12000;  // all modes below: the first mesh is sized from the wavelength
+  o.tolerance = 0.5;
+  const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {4, 2, 2});
+  PrecomputeReport full;
+  precompute_surface(box, "box", o, full);
+  ASSERT_FALSE(full.coarsened);
+  ASSERT_GT(full.eigen.factor_bytes, 0);
+  PrecomputeOptions tight = o;
+  tight.max_memory = full.eigen.factor_bytes + 8.0 * double(full.dofs) * 64;
+  PrecomputeReport r;
+  const Soundbank b = precompute_surface(box, "box", tight, r);
+  EXPECT_TRUE(r.coarsened);
+  EXPECT_GT(r.max_tet_volume, full.max_tet_volume);
+  EXPECT_LT(r.dofs, full.dofs);
+  EXPECT_GT(b.mode_count(), 0u);
+  EXPECT_EQ(r.frequency_error.size(), b.mode_count());
+}
+
+// TetGen runs in a child process: when it aborts (as TetGen 1.5's assertions do on some
+// surfaces and bounds), precompute reports it as bad input instead of crashing.
+TEST(ModeError, TetGenAbortIsAnErrorNotACrash) {
+  TetOptions t;
+  t.max_volume = 1e-5;
+  const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {2, 1, 1});
+  ASSERT_EQ(setenv("CHLADNI_TEST_TETGEN_ABORT", "1", 1), 0);
+  try {
+    tetrahedralize(box, t);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(
+        std::string(e.what()).find("TetGen failed on this surface (an internal error, signal"),
+        std::string::npos)
+        << e.what();
+  }
+  unsetenv("CHLADNI_TEST_TETGEN_ABORT");
+  EXPECT_GT(tetrahedralize(box, t).tets.size(), 100u);
 }

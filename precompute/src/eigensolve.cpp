@@ -138,6 +138,28 @@ std::string gigabytes(double bytes) {
   return buf;
 }
 
+// Block Lanczos basis: n x dim doubles, within 4 GB and what the factor leaves of the budget.
+Eigen::Index lanczos_dim(Eigen::Index n, double factor_bytes, const EigenOptions& o) {
+  const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
+  const double basis_cap = o.max_memory > 0 ? std::min(4e9, o.max_memory - factor_bytes) : 4e9;
+  const Eigen::Index want_dim = std::max<Eigen::Index>(o.block * 4, 3 * max_nev + 64);
+  return std::max<Eigen::Index>(
+      o.block * 4, std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n)))));
+}
+
+void check_budget(Eigen::Index n, const FactorEstimate& est, double basis_bytes,
+                  const EigenOptions& o, const std::string& how) {
+  if (o.max_memory <= 0 || est.bytes + basis_bytes <= o.max_memory) return;
+  throw BudgetError("the eigen-solve would need about " + gigabytes(est.bytes + basis_bytes) +
+                    " (the sparse factor of K - sigma M for " + std::to_string(n) + " DOFs: " +
+                    gigabytes(est.bytes) + ", nnz(L) " + std::to_string(std::llround(est.entries)) +
+                    ", " + std::to_string(std::llround(est.flops / 1e9)) +
+                    " GFLOP; the Lanczos basis: " + gigabytes(basis_bytes) + how +
+                    "), more than the memory budget of " + gigabytes(o.max_memory) +
+                    ": raise --max-tet-volume (coarser elements), lower --max-freq or "
+                    "--max-modes, or raise --max-memory");
+}
+
 // Shift-invert Lanczos over the sparse factor: the lowest eigenpairs of K v = lambda M v, as
 // many as o.modes asks (plus the six rigid ones) or all below o.max_frequency.
 void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOptions& o,
@@ -156,31 +178,18 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
     throw InputError("asked for " + std::to_string(o.modes) + " modes but the mesh has only " +
                      std::to_string(n) + " degrees of freedom (or the cap " +
                      std::to_string(o.mode_cap) + " is lower)");
-  // Block Lanczos basis: n x dim doubles, within 4 GB and what the factor leaves of the budget.
   const FactorEstimate est = op.analyze();
   r.factor_entries = est.entries, r.factor_bytes = est.bytes, r.factor_flops = est.flops;
-  const double basis_cap = o.max_memory > 0 ? std::min(4e9, o.max_memory - est.bytes) : 4e9;
-  const Eigen::Index want_dim = std::max<Eigen::Index>(o.block * 4, 3 * max_nev + 64);
-  const Eigen::Index max_dim = std::max<Eigen::Index>(
-      o.block * 4, std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n)))));
+  const Eigen::Index max_dim = lanczos_dim(n, est.bytes, o);
   r.basis_bytes = 8.0 * double(n) *
                   double(o.method == EigenOptions::Method::BlockLanczos
-                             ? std::min(max_dim, want_dim)
+                             ? max_dim
                              : std::min<Eigen::Index>(n, 2 * nev + 1));
   if (status && est.bytes > 0)
     status("factor: " + gigabytes(est.bytes) + " (nnz(L) " +
            std::to_string(std::llround(est.entries)) + ", " +
            std::to_string(std::llround(est.flops / 1e9)) + " GFLOP)");
-  if (o.max_memory > 0 && est.bytes + r.basis_bytes > o.max_memory)
-    throw BudgetError("the eigen-solve would need about " + gigabytes(est.bytes + r.basis_bytes) +
-                      " (the sparse factor of K - sigma M for " + std::to_string(n) +
-                      " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " +
-                      std::to_string(std::llround(est.entries)) + ", " +
-                      std::to_string(std::llround(est.flops / 1e9)) +
-                      " GFLOP; the Lanczos basis: " + gigabytes(r.basis_bytes) +
-                      "), more than the memory budget of " + gigabytes(o.max_memory) +
-                      ": raise --max-tet-volume (coarser elements), lower --max-freq or "
-                      "--max-modes, or raise --max-memory");
+  check_budget(n, est, r.basis_bytes, o, "");
   // Round-off on a badly shaped mesh can make K - sigma M indefinite along the rigid motions
   // when |sigma| is tiny next to K's scale: move the shift further down and retry.
   for (int attempt = 0;; ++attempt) {
@@ -352,6 +361,32 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
     r.residual.push_back((Kv.col(c) - r.lambda[i] * Mk.col(c)).norm() / Kv.col(c).norm());
   }
   return r;
+}
+
+double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o) {
+  if (o.max_memory <= 0) return 0;
+  // The node graph: each element couples all its nodes. K's pattern is this graph with each
+  // entry a 3 x 3 block, so its factor has 9 times the entries and 27 times the flops.
+  const int npe = mesh.nodes_per_element();
+  std::vector<Eigen::Triplet<double, int>> t;
+  t.reserve(mesh.element_count() * std::size_t(npe * npe));
+  for (std::size_t e = 0; e < mesh.element_count(); ++e)
+    for (int a = 0; a < npe; ++a)
+      for (int b = 0; b < npe; ++b)
+        t.emplace_back(int(mesh.elements[e * npe + a]), int(mesh.elements[e * npe + b]),
+                       a == b ? 1.0 : 0.0);
+  SparseMatrix G(Eigen::Index(mesh.nodes.size()), Eigen::Index(mesh.nodes.size()));
+  G.setFromTriplets(t.begin(), t.end());
+  G.makeCompressed();
+  t = {};
+  Factor f;
+  FactorEstimate est = f.analyze(G);
+  if (est.bytes <= 0) return 0;  // this build's factorization cannot say before factorizing
+  est.entries *= 9, est.bytes *= 9, est.flops *= 27;
+  const Eigen::Index n = Eigen::Index(mesh.dofs());
+  const double basis = 8.0 * double(n) * double(lanczos_dim(n, est.bytes, o));
+  check_budget(n, est, basis, o, "; estimated from the mesh before assembly");
+  return est.bytes + basis;
 }
 
 }  // namespace chladni::precompute

@@ -61,6 +61,7 @@ FemPass fem_pass(TetMesh tets, const PrecomputeOptions& o, const EigenOptions& e
   f.tets = std::move(tets);
   f.nodes = fem.nodes.size();
   f.dofs = fem.dofs();
+  check_eigen_memory(fem, eo);  // refuse before assembly, the largest cost before the factor
   FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
   f.nonzeros = std::size_t(km.K.nonZeros());
   sw.start("eigen-solve");
@@ -117,7 +118,7 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
   if (!chosen)
     volume = o.max_modes > 0 ? coarse_max_volume(surface)
                              : auto_max_volume(o.material, o.max_frequency, o.order, surface);
-  r.max_tet_volume = volume;
+  double meshed = volume;  // the bound `tets` was made with
   TetOptions topt = o.tet;
   topt.max_volume = volume;
   sw.start("tetrahedralize");
@@ -132,10 +133,28 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     try {
       f = fem_pass(std::move(tets), o, eo, p, sw);
     } catch (const BudgetError& e) {
-      if (!best) throw;
-      r.converged = false;
-      r.unconverged_reason = std::string("the next refinement does not fit: ") + e.what();
-      break;
+      if (best) {
+        r.converged = false;
+        r.unconverged_reason = std::string("the next refinement does not fit: ") + e.what();
+        break;
+      }
+      // The first mesh does not fit: coarsen it (the estimate will say what that costs), down
+      // to the coarsest quality mesh, before refusing.
+      const double coarsest = coarse_max_volume(surface);
+      if (chosen || topt.max_volume >= coarsest) throw;
+      topt.max_volume = std::min(coarsest, 8 * topt.max_volume);
+      meshed = topt.max_volume;
+      r.coarsened = true;
+      if (p.note)
+        p.note(std::string("warning: ") + e.what() + "; meshing coarser (tets of at most " +
+               std::to_string(topt.max_volume) + " m^3) to fit");
+      sw.start("tetrahedralize");
+      tets = tetrahedralize(surface, topt);
+      first.vertices.assign(tets.nodes.begin(),
+                            tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
+      first.triangles = tets.surface_triangles;
+      --pass;
+      continue;
     }
     const double worst = worst_error(f, o);
     r.passes.push_back(
@@ -145,6 +164,7 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
       p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
              " tetrahedra, largest estimated frequency error " + percent(worst));
     best = std::move(f);
+    r.max_tet_volume = meshed;
     if (worst <= o.tolerance) {
       r.converged = true;
       break;
@@ -160,7 +180,7 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     }
     sw.start("tetrahedralize");
     topt.max_volume = std::min(topt.max_volume, refined_volume(*best, worst, o));
-    r.max_tet_volume = topt.max_volume;
+    meshed = topt.max_volume;
     try {
       tets = tetrahedralize(surface, topt);
     } catch (const InputError& e) {  // e.g. more tets than this tool meshes

@@ -1,12 +1,17 @@
 // TetGen wrapper: the only unit that includes tetgen.h (AGPL; precompute only, DESIGN.md).
+#include <sys/wait.h>
 #include <tetgen.h>
+#include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string>
 
 #include "chladni/core/error.hpp"
@@ -92,26 +97,7 @@ double enclosed_volume(const SurfaceMesh& s) {
   return std::abs(v);
 }
 
-}  // namespace
-
-TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
-  // A regular tetrahedron of volume V has edges (6 sqrt(2) V)^(1/3).
-  constexpr double kMaxTets = 2e7;
-  const double volume = enclosed_volume(input);
-  if (o.max_volume > 0 && volume / o.max_volume > kMaxTets) {
-    char buf[160];
-    std::snprintf(buf, sizeof buf,
-                  "tetrahedra of at most %.3g m^3 would fill this %.3g m^3 solid "
-                  "with about %.3g of them",
-                  o.max_volume, volume, volume / o.max_volume);
-    throw InputError(std::string(buf) +
-                     ", more than the 20 million this tool meshes: raise "
-                     "--max-tet-volume or lower --max-freq/--max-modes");
-  }
-  const SurfaceMesh s =
-      o.max_volume > 0
-          ? split_long_edges(input, 1.5 * std::cbrt(6 * std::numbers::sqrt2 * o.max_volume))
-          : input;
+TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   tetgenio in, out;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(s.vertices.size());
@@ -176,6 +162,131 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
     if (dot(cross(sub(b, a), sub(c, a)), sub(d, a)) < 0) std::swap(tet[2], tet[3]);
   }
   return m;
+}
+
+void append(std::vector<char>& out, const void* p, std::size_t n) {
+  const char* c = static_cast<const char*>(p);
+  out.insert(out.end(), c, c + n);
+}
+
+void read_into(const std::vector<char>& in, std::size_t& at, void* p, std::size_t n) {
+  if (in.size() - at < n) throw InternalError("TetGen's child process sent a short mesh");
+  std::memcpy(p, in.data() + at, n);
+  at += n;
+}
+
+bool write_all(int fd, const char* p, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w, n -= std::size_t(w);
+  }
+  return true;
+}
+
+// Runs run_tetgen in a child process and reads its mesh back through a pipe. Returns nothing,
+// with `crash` saying how, when the child dies; rethrows the child's InputError.
+std::optional<TetMesh> tetgen_isolated(const SurfaceMesh& s, const TetOptions& o,
+                                       std::string& crash) {
+  int fd[2];
+  if (pipe(fd) != 0) return run_tetgen(s, o);  // no isolation to be had: run in-process
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(fd[0]), close(fd[1]);
+    return run_tetgen(s, o);
+  }
+  if (pid == 0) {
+    close(fd[0]);
+    if (std::getenv("CHLADNI_TEST_TETGEN_ABORT")) std::abort();  // tests: TetGen's assertion
+    std::string msg;
+    std::vector<char> bytes;
+    char status = 0;
+    try {
+      const TetMesh m = run_tetgen(s, o);
+      const uint64_t head[4] = {m.nodes.size(), m.tets.size(), m.surface_vertices,
+                                m.surface_triangles.size()};
+      append(bytes, head, sizeof head);
+      append(bytes, m.nodes.data(), m.nodes.size() * sizeof(Vec3));
+      append(bytes, m.tets.data(), m.tets.size() * sizeof(m.tets[0]));
+      append(bytes, m.surface_triangles.data(),
+             m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
+    } catch (const std::exception& e) {
+      status = 1;
+      msg = e.what();
+      bytes.assign(msg.begin(), msg.end());
+    }
+    const bool ok = write_all(fd[1], &status, 1) && write_all(fd[1], bytes.data(), bytes.size());
+    close(fd[1]);
+    _exit(ok ? 0 : 1);
+  }
+  close(fd[1]);
+  std::vector<char> bytes;
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = read(fd[0], buf, sizeof buf);
+    if (n > 0)
+      bytes.insert(bytes.end(), buf, buf + n);
+    else if (n == 0 || errno != EINTR)
+      break;
+  }
+  close(fd[0]);
+  int wstatus = 0;
+  while (waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(wstatus) || !WIFEXITED(wstatus) || WEXITSTATUS(wstatus) != 0 || bytes.empty()) {
+    crash = WIFSIGNALED(wstatus)
+                ? std::string("an internal error, signal ") + std::to_string(WTERMSIG(wstatus))
+                : std::string("its process ended early");
+    return std::nullopt;
+  }
+  if (bytes[0] == 1) throw InputError(std::string(bytes.begin() + 1, bytes.end()));
+  std::size_t at = 1;
+  uint64_t head[4];
+  read_into(bytes, at, head, sizeof head);
+  TetMesh m;
+  m.nodes.resize(head[0]);
+  m.tets.resize(head[1]);
+  m.surface_vertices = head[2];
+  m.surface_triangles.resize(head[3]);
+  read_into(bytes, at, m.nodes.data(), m.nodes.size() * sizeof(Vec3));
+  read_into(bytes, at, m.tets.data(), m.tets.size() * sizeof(m.tets[0]));
+  read_into(bytes, at, m.surface_triangles.data(),
+            m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
+  return m;
+}
+
+}  // namespace
+
+TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
+  // A regular tetrahedron of volume V has edges (6 sqrt(2) V)^(1/3).
+  constexpr double kMaxTets = 2e7;
+  const double volume = enclosed_volume(input);
+  if (o.max_volume > 0 && volume / o.max_volume > kMaxTets) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "tetrahedra of at most %.3g m^3 would fill this %.3g m^3 solid "
+                  "with about %.3g of them",
+                  o.max_volume, volume, volume / o.max_volume);
+    throw InputError(std::string(buf) +
+                     ", more than the 20 million this tool meshes: raise "
+                     "--max-tet-volume or lower --max-freq/--max-modes");
+  }
+  const SurfaceMesh s =
+      o.max_volume > 0
+          ? split_long_edges(input, 1.5 * std::cbrt(6 * std::numbers::sqrt2 * o.max_volume))
+          : input;
+  // TetGen 1.5 fails internal assertions (abort) on some surfaces at some volume bounds; in a
+  // child process that is an error to report, and a slightly smaller bound usually avoids it.
+  TetOptions tries = o;
+  for (int attempt = 0;; ++attempt) {
+    std::string crash;
+    if (auto m = tetgen_isolated(s, tries, crash)) return std::move(*m);
+    if (attempt == 2 || tries.max_volume <= 0)
+      throw InputError("TetGen failed on this surface (" + crash +
+                       "); try another --max-tet-volume or --tolerance, or --repair");
+    tries.max_volume *= 0.9;
+  }
 }
 
 TetQuality tet_quality(const TetMesh& m) {

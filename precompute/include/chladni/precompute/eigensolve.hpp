@@ -54,6 +54,10 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
                         const EigenOptions& options,
                         const std::function<void(const std::string&)>& status = {});
 
+/// Before assembly: the memory solve_modes will need for `mesh`'s K and M (CHOLMOD's analysis
+/// of the node graph, scaled to three DOFs per node), in bytes. Throws BudgetError with the
+/// numbers when it exceeds options.max_memory; 0 without a budget or without CHOLMOD.
+double check_eigen_memory(const FemMesh& mesh, const EigenOptions& options);
 /// Which factorization solve_modes uses in this build.
 std::string factorization_name();
 
