@@ -132,12 +132,15 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     FemPass f;
     try {
       f = fem_pass(std::move(tets), o, eo, p, sw);
-    } catch (const BudgetError& e) {
+    } catch (const InputError& e) {
+      // A refined mesh that cannot be solved (over the budget, or a degenerate tetrahedron
+      // from TetGen) leaves the previous one standing.
       if (best) {
         r.converged = false;
-        r.unconverged_reason = std::string("the next refinement does not fit: ") + e.what();
+        r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
         break;
       }
+      if (!dynamic_cast<const BudgetError*>(&e)) throw;
       // The first mesh does not fit: coarsen it (the estimate will say what that costs), down
       // to the coarsest quality mesh, before refusing.
       const double coarsest = coarse_max_volume(surface);
@@ -184,7 +187,7 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     try {
       tets = tetrahedralize(surface, topt);
     } catch (const InputError& e) {  // e.g. more tets than this tool meshes
-      r.unconverged_reason = std::string("the next refinement does not fit: ") + e.what();
+      r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
       break;
     }
   }

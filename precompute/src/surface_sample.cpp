@@ -4,7 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
-#include <optional>
+#include <memory>
 #include <unordered_map>
 
 #include "chladni/core/error.hpp"
@@ -139,14 +139,14 @@ Eigen::MatrixXd sample_on_surface(const TetMesh& tets, const Eigen::MatrixXd& ve
   std::unordered_map<Vec3, uint32_t, VecHash> at;
   for (std::size_t v = 0; v < tets.surface_vertices; ++v) at.emplace(tets.nodes[v], uint32_t(v));
   Eigen::MatrixXd out(Eigen::Index(3 * surface.vertices.size()), vectors.cols());
-  std::optional<TriangleGrid> grid;
+  std::unique_ptr<TriangleGrid> grid;  // built on the first vertex that needs it
   for (std::size_t v = 0; v < surface.vertices.size(); ++v) {
     const auto row = Eigen::Index(3 * v);
     if (auto it = at.find(surface.vertices[v]); it != at.end()) {
       out.middleRows(row, 3) = vectors.middleRows(Eigen::Index(3 * it->second), 3);
       continue;
     }
-    if (!grid) grid.emplace(tets.nodes, tets.surface_triangles);
+    if (!grid) grid = std::make_unique<TriangleGrid>(tets.nodes, tets.surface_triangles);
     const Closest c = grid->nearest(surface.vertices[v]);
     out.middleRows(row, 3).setZero();
     for (int j = 0; j < 3; ++j)
