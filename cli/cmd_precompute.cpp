@@ -86,7 +86,6 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
   j["accuracy"] = {{"tolerance", a.tolerance},
                    {"converged", r.converged},
                    {"reason", r.unconverged_reason},
-                   {"coarsened_to_fit_memory", r.coarsened},
                    {"meshes", passes}};
   nlohmann::json freqs = nlohmann::json::array();
   for (double w : bank.omega) freqs.push_back(w / (2 * std::numbers::pi));

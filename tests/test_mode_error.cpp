@@ -195,27 +195,25 @@ TEST(ModeError, RefinementStopsShortWithTheReason) {
   for (double e : r.frequency_error) EXPECT_GT(e, 0);
 }
 
-// A first mesh over the memory budget is coarsened until it fits (here the coarsest quality
-// mesh), with the cost stated by the estimate, instead of being refused.
-TEST(ModeError, FirstMeshOverTheBudgetIsCoarsened) {
+// All modes below --max-freq on a mesh that does not fit the budget: refused before assembly
+// (exit 3 in the CLI), with how many modes the band holds and the option to change.
+TEST(ModeError, AllModesOverTheBudgetAreRefusedAtOnce) {
   PrecomputeOptions o;
   o.transfer = false;
-  o.max_frequency = 12000;  // all modes below: the first mesh is sized from the wavelength
-  o.tolerance = 0.5;
+  o.max_frequency = 12000;  // the first mesh is sized from the wavelength
   const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {4, 2, 2});
-  PrecomputeReport full;
-  precompute_surface(box, "box", o, full);
-  ASSERT_FALSE(full.coarsened);
-  ASSERT_GT(full.eigen.factor_bytes, 0);
-  PrecomputeOptions tight = o;
-  tight.max_memory = full.eigen.factor_bytes + 8.0 * double(full.dofs) * 64;
+  o.max_memory = 1e6;  // 1 MB
   PrecomputeReport r;
-  const Soundbank b = precompute_surface(box, "box", tight, r);
-  EXPECT_TRUE(r.coarsened);
-  EXPECT_GT(r.max_tet_volume, full.max_tet_volume);
-  EXPECT_LT(r.dofs, full.dofs);
-  EXPECT_GT(b.mode_count(), 0u);
-  EXPECT_EQ(r.frequency_error.size(), b.mode_count());
+  try {
+    precompute_surface(box, "box", o, r);
+    ADD_FAILURE() << "no error";
+  } catch (const BudgetError& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("estimated from the mesh before assembly"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("modes lie below 12000 Hz"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("--max-modes"), std::string::npos) << msg;
+  }
+  EXPECT_TRUE(r.passes.empty());
 }
 
 // TetGen runs in a child process: when it aborts (as TetGen 1.5's assertions do on some

@@ -109,6 +109,20 @@ std::string percent(double x) {
 
 // Meshes the solid, solves, and refines where the estimate asks until the modes asked for are
 // within o.tolerance, o.max_passes meshes or the memory budget allow.
+// Weyl's law for an elastic solid: N(omega) ~ V omega^3 / (6 pi^2) (1/c_p^3 + 2/c_s^3), the
+// number of modes below max_frequency, from the volume alone.
+double weyl_modes(const SurfaceMesh& surface, const PrecomputeOptions& o) {
+  double v = 0;
+  for (const auto& t : surface.triangles)
+    v += dot(surface.vertices[t[0]], cross(surface.vertices[t[1]], surface.vertices[t[2]])) / 6;
+  const double w = 2 * std::numbers::pi * o.max_frequency;
+  const double cs = o.material.shear_speed();
+  const double cp =
+      cs * std::sqrt((o.material.lame_lambda() + 2 * o.material.lame_mu()) / o.material.lame_mu());
+  return std::abs(v) * w * w * w / (6 * std::numbers::pi * std::numbers::pi) *
+         (1 / (cp * cp * cp) + 2 / (cs * cs * cs));
+}
+
 // `first` receives the first mesh's boundary: the surface the soundbank keeps.
 FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& o,
                            const EigenOptions& eo, const Progress& p, Stopwatch& sw,
@@ -140,24 +154,14 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
         r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
         break;
       }
-      if (!dynamic_cast<const BudgetError*>(&e)) throw;
-      // The first mesh does not fit: coarsen it (the estimate will say what that costs), down
-      // to the coarsest quality mesh, before refusing.
-      const double coarsest = coarse_max_volume(surface);
-      if (chosen || topt.max_volume >= coarsest) throw;
-      topt.max_volume = std::min(coarsest, 8 * topt.max_volume);
-      meshed = topt.max_volume;
-      r.coarsened = true;
-      if (p.note)
-        p.note(std::string("warning: ") + e.what() + "; meshing coarser (tets of at most " +
-               std::to_string(topt.max_volume) + " m^3) to fit");
-      sw.start("tetrahedralize");
-      tets = tetrahedralize(surface, topt);
-      first.vertices.assign(tets.nodes.begin(),
-                            tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
-      first.triangles = tets.surface_triangles;
-      --pass;
-      continue;
+      // The first mesh does not fit. A coarser one would resolve neither the band nor the
+      // modes in it, and searching for them all is the work to avoid: refuse now, saying how
+      // many modes the band holds.
+      if (!dynamic_cast<const BudgetError*>(&e) || o.max_modes > 0) throw;
+      throw BudgetError(std::string(e.what()) + "; about " +
+                        std::to_string(std::llround(weyl_modes(surface, o))) + " modes lie below " +
+                        std::to_string(int(o.max_frequency)) +
+                        " Hz: ask for the first N with --max-modes");
     }
     const double worst = worst_error(f, o);
     r.passes.push_back(

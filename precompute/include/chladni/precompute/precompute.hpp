@@ -66,10 +66,8 @@ struct PrecomputeReport {
     double seconds = 0;
   };
   std::vector<MeshPass> passes;
-  bool converged = true;  ///< every mode asked for is within PrecomputeOptions::tolerance
-  std::string unconverged_reason;
-  /// The first mesh was coarser than --max-freq asks, to fit the memory budget.
-  bool coarsened = false;  ///< why refining stopped short, when it did
+  bool converged = true;           ///< every mode asked for is within PrecomputeOptions::tolerance
+  std::string unconverged_reason;  ///< why refining stopped short, when it did
   std::size_t tets = 0, nodes = 0, dofs = 0, nonzeros = 0;
   TetQuality quality;
   EigenResult eigen;  ///< vectors are released after use
