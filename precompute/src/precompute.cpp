@@ -107,22 +107,19 @@ std::string percent(double x) {
   return buf;
 }
 
-// Meshes the solid, solves, and refines where the estimate asks until the modes asked for are
-// within o.tolerance, o.max_passes meshes or the memory budget allow.
 // Weyl's law for an elastic solid: N(omega) ~ V omega^3 / (6 pi^2) (1/c_p^3 + 2/c_s^3), the
 // number of modes below max_frequency, from the volume alone.
-double weyl_modes(const SurfaceMesh& surface, const PrecomputeOptions& o) {
-  double v = 0;
-  for (const auto& t : surface.triangles)
-    v += dot(surface.vertices[t[0]], cross(surface.vertices[t[1]], surface.vertices[t[2]])) / 6;
+double weyl_modes(double volume, const PrecomputeOptions& o) {
   const double w = 2 * std::numbers::pi * o.max_frequency;
   const double cs = o.material.shear_speed();
   const double cp =
       cs * std::sqrt((o.material.lame_lambda() + 2 * o.material.lame_mu()) / o.material.lame_mu());
-  return std::abs(v) * w * w * w / (6 * std::numbers::pi * std::numbers::pi) *
+  return volume * w * w * w / (6 * std::numbers::pi * std::numbers::pi) *
          (1 / (cp * cp * cp) + 2 / (cs * cs * cs));
 }
 
+// Meshes the solid, solves, and refines where the estimate asks until the modes asked for are
+// within o.tolerance, o.max_passes meshes or the memory budget allow.
 // `first` receives the first mesh's boundary: the surface the soundbank keeps.
 FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& o,
                            const EigenOptions& eo, const Progress& p, Stopwatch& sw,
@@ -159,8 +156,8 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
       // many modes the band holds.
       if (!dynamic_cast<const BudgetError*>(&e) || o.max_modes > 0) throw;
       throw BudgetError(std::string(e.what()) + "; about " +
-                        std::to_string(std::llround(weyl_modes(surface, o))) + " modes lie below " +
-                        std::to_string(int(o.max_frequency)) +
+                        std::to_string(std::llround(weyl_modes(std::abs(r.mesh.volume), o))) +
+                        " modes lie below " + std::to_string(int(o.max_frequency)) +
                         " Hz: ask for the first N with --max-modes");
     }
     const double worst = worst_error(f, o);
