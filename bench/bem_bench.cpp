@@ -2,10 +2,13 @@
 // the one-time near-field cache, the per-frequency assembly, the LU (double below the direct
 // limit, single precision above) and GMRES, for a few frequencies a small step apart; plus the
 // multipole quadrature. Surfaces: icospheres of radius 0.1 m (level L: 20 x 4^L triangles) or
-// mesh files.
-// Usage: chladni_bem_bench [SURFACE ...] [--freq HZ] [--steps N] [--backend cpu|gpu] [--json OUT]
+// mesh files, optionally split (FILE@S: each triangle split into 4, S times, as the transfer does).
+// Above BemOptions::hmatrix_limit elements the system is a hierarchical matrix; "LU" is then its
+// hierarchical LU.
+// Usage: chladni_bem_bench [SURFACE ...] [--freq HZ] [--steps N] [--step REL] [--backend cpu|gpu]
+//                          [--refactor-phase RAD] [--json OUT]
 //        (gpu: the centroid-rule rows on the Vulkan device, kernels/bem_far.comp)
-//        SURFACE: icosphere:L or a mesh file (default icosphere:3 icosphere:4 meshes/bowl.obj)
+//        SURFACE: icosphere:L, FILE or FILE@S (default icosphere:3 icosphere:4 meshes/bowl.obj)
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -17,6 +20,7 @@
 #include "../tests/fem_fixtures.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/gpu/context.hpp"
+#include "chladni/precompute/acoustic_transfer.hpp"
 #include "chladni/precompute/bem.hpp"
 
 using namespace chladni;
@@ -28,19 +32,27 @@ static double since(std::chrono::steady_clock::time_point t0) {
 
 static precompute::SurfaceMesh load(const std::string& s) {
   if (s.rfind("icosphere:", 0) == 0) return test::icosphere(0.1, std::stoi(s.substr(10)));
-  return precompute::read_mesh(s);
+  const std::size_t at = s.rfind('@');
+  if (at == std::string::npos) return precompute::read_mesh(s);
+  return precompute::BemSurface(precompute::read_mesh(s.substr(0, at)), std::stoi(s.substr(at + 1)))
+      .mesh;
 }
 
 int main(int argc, char** argv) {
   std::vector<std::string> surfaces;
   double freq = 2000;
   int steps = 3;
+  double step = 0.005, refactor_phase = -1;
   std::string json_path, backend = "cpu";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--freq") && i + 1 < argc)
       freq = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--steps") && i + 1 < argc)
       steps = std::stoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--refactor-phase") && i + 1 < argc)
+      refactor_phase = std::stod(argv[++i]);
+    else if (!std::strcmp(argv[i], "--step") && i + 1 < argc)
+      step = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc)
       backend = argv[++i];
     else if (!std::strcmp(argv[i], "--json") && i + 1 < argc)
@@ -55,6 +67,7 @@ int main(int argc, char** argv) {
   for (const std::string& name : surfaces) {
     const precompute::BemMesh mesh(load(name));
     precompute::BemOptions o;
+    if (refactor_phase >= 0) o.refactor_phase = refactor_phase;
     if (backend == "gpu") o.gpu = std::make_shared<gpu::Context>();
     precompute::BemSolver solver(mesh, o);
     std::vector<cd> q(mesh.elements());
@@ -62,10 +75,12 @@ int main(int argc, char** argv) {
     double first_assembly = 0, multipole = 0;
     int iterations = 0;
     for (int s = 0; s < steps; ++s) {
-      const double k = 2 * std::numbers::pi * freq * (1 + 0.005 * s) / 343.0;
+      const double k = 2 * std::numbers::pi * freq * (1 + step * s) / 343.0;
       const auto res = solver.solve(k, q);
       if (s == 0) first_assembly = solver.times().assembly;
       iterations += res.iterations;
+      std::fprintf(stderr, "  step %d: k %.2f, %d iterations%s\n", s, k, res.iterations,
+                   res.factorized ? ", factorized" : "");
       const auto t0 = std::chrono::steady_clock::now();
       precompute::bem_multipoles(mesh, k, {0, 0, 0}, 20, res.pressure, q);
       multipole += since(t0);
@@ -80,6 +95,8 @@ int main(int argc, char** argv) {
                    {"backend", backend == "gpu" ? o.gpu->info().name : std::string("cpu")},
                    {"elements", mesh.elements()},
                    {"frequency_hz", freq},
+                   {"frequency_step", step},
+                   {"hierarchical", mesh.elements() > o.hmatrix_limit},
                    {"near_cache_s", cache},
                    {"assembly_per_frequency_s", per},
                    {"lu_total_s", t.factorization},

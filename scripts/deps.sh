@@ -10,6 +10,7 @@ PACKAGES=(
   libxxhash-dev openmpi-bin libopenmpi-dev
   libgtest-dev libgmock-dev libbenchmark-dev libstk-dev
   zlib1g-dev libfftw3-dev libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
+  libhmat-oss-dev
   clang-format clang libclang-rt-14-dev llvm
 )
 

@@ -10,14 +10,12 @@
 #include <numbers>
 #include <optional>
 
+#include "blas_threads.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "parallel.hpp"
 #include "timing.hpp"
 
-// OpenBLAS's thread control, when the BLAS is OpenBLAS (weak: absent with another BLAS).
-extern "C" void openblas_set_num_threads(int) __attribute__((weak));
-extern "C" int openblas_get_num_threads() __attribute__((weak));
 // Level 3 only: this file is built without EIGEN_USE_BLAS because Debian 12's OpenBLAS
 // 0.3.21 zgemv_n kernel reads past the end of its operands (OpenBLAS issue #4013), which
 // ASan caught inside Eigen's BLAS-backed LLT; Eigen's own kernels do the level-2 work.
@@ -29,24 +27,7 @@ namespace chladni::precompute {
 namespace {
 
 // Modes are fitted in parallel, one per core: a threaded BLAS inside each fit would only
-// oversubscribe the cores (measured: 1.6x slower on 2 cores).
-class SingleThreadedBlas {
- public:
-  SingleThreadedBlas() {
-    if (openblas_set_num_threads && openblas_get_num_threads) {
-      saved_ = openblas_get_num_threads();
-      openblas_set_num_threads(1);
-    }
-  }
-  ~SingleThreadedBlas() {
-    if (saved_ > 0) openblas_set_num_threads(saved_);
-  }
-  SingleThreadedBlas(const SingleThreadedBlas&) = delete;
-  SingleThreadedBlas& operator=(const SingleThreadedBlas&) = delete;
-
- private:
-  int saved_ = 0;
-};
+// oversubscribe the cores (measured: 1.6x slower on 2 cores). SingleThreadedBlas holds it off.
 
 using cd = std::complex<double>;
 

@@ -27,6 +27,10 @@ struct AcousticOptions {
   Method method = Method::Auto;
   /// The dense BEM system costs 16 N^2 bytes (1 GB at 8000) and an LU of 8/3 N^3 flops.
   std::size_t bem_auto_elements = 8000;
+  /// bem: split the surface's triangles up to this many elements (above BemOptions::
+  /// hmatrix_limit the system is a hierarchical matrix: about 1 GB and 20-60 s per frequency
+  /// at 26,000 elements on 2 cores).
+  std::size_t bem_max_elements = 32768;
   double bem_elements_per_wavelength = 6.0;
   BemOptions bem;
   double sound_speed = 343.0;  ///< m/s

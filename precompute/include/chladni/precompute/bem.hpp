@@ -25,6 +25,9 @@ class Context;
 }
 
 namespace chladni::precompute {
+namespace bem_detail {
+class HMatrixSystem;
+}
 
 /// A closed triangle surface as constant boundary elements.
 struct BemMesh {
@@ -53,6 +56,11 @@ struct BemOptions {
   /// Above direct_limit: GMRES preconditioned by the single-precision LU of the last factorized
   /// frequency k0 while |k - k0| x (bounding-box diagonal) stays below this; else a new LU.
   double refactor_phase = 1.0;
+  /// Above this many elements the matrix is a hierarchical matrix (hmat-oss): far blocks
+  /// compressed to hmatrix_epsilon, GMRES preconditioned by its LU at hmatrix_lu_epsilon.
+  std::size_t hmatrix_limit = 8000;
+  double hmatrix_epsilon = 1e-4;
+  double hmatrix_lu_epsilon = 1e-2;
   int threads = 0;  ///< 0: all cores
   /// Vulkan device for the centroid-rule rows (kernels/bem_far.comp, float); null: the CPU loop.
   std::shared_ptr<gpu::Context> gpu;
@@ -116,11 +124,14 @@ class BemSolver {
   struct Lu;         ///< LAPACK LU factors of one frequency's matrix
 
  private:
+  Result solve_dense(double k, std::span<const cd> dpdn);
+  Result solve_hierarchical(double k, std::span<const cd> dpdn);
   const BemMesh& mesh_;
   BemOptions options_;
   std::unique_ptr<Lu> lu_;
   std::unique_ptr<NearCache> near_;
   std::unique_ptr<BemGpuRows> gpu_rows_;
+  std::unique_ptr<bem_detail::HMatrixSystem> hmatrix_;
   std::vector<cd> matrix_;  // the current frequency's system, kept to reuse its memory
   double extent_ = 0;
   Times times_;

@@ -145,6 +145,9 @@ void BemOptions::validate() const {
   if (!(gmres_tolerance > 0 && gmres_tolerance < 1)) bad("GMRES tolerance must lie in (0, 1)");
   if (gmres_restart < 2 || gmres_max_iterations < 1) bad("GMRES restart >= 2, iterations >= 1");
   if (!(refactor_phase >= 0) || !std::isfinite(refactor_phase)) bad("refactor phase must be >= 0");
+  if (!(hmatrix_epsilon > 0 && hmatrix_epsilon < 0.1)) bad("H-matrix epsilon must lie in (0, 0.1)");
+  if (!(hmatrix_lu_epsilon >= hmatrix_epsilon && hmatrix_lu_epsilon < 0.5))
+    bad("H-matrix LU epsilon must lie in [epsilon, 0.5)");
 }
 
 ElementIntegrals element_integrals(const BemMesh& m, uint32_t j, const Vec3& x, const Vec3& nx,

@@ -7,10 +7,10 @@
 #include <memory>
 #include <numbers>
 
+#include "../timing.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
-#include "timing.hpp"
 
 namespace chladni::precompute {
 namespace {
@@ -39,12 +39,14 @@ double null_field_error(const BemMesh& mesh, double k, const std::vector<cd>& p,
 int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& o) {
   const double target = 2 * std::numbers::pi / o.bem_elements_per_wavelength;
   double n = double(surface.mesh().triangles.size()), h = surface.mean_element_size();
+  const bool forced = o.method == AcousticOptions::Method::Bem;
+  const double cap = double(forced ? o.bem_max_elements : o.bem_auto_elements);
   int fits = -1;
-  for (int level = 0; level <= 4 && n <= double(o.bem_auto_elements); ++level, n *= 4, h /= 2) {
+  for (int level = 0; level <= 4 && n <= cap; ++level, n *= 4, h /= 2) {
     fits = level;
     if (h * k <= target) return level;
   }
-  return o.method == AcousticOptions::Method::Bem ? std::max(fits, 0) : -1;
+  return forced ? std::max(fits, 0) : -1;
 }
 
 AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,

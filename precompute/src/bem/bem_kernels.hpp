@@ -116,4 +116,14 @@ struct FarGeometry {
 void far_row(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k, double al, double* rre,
              double* rim, double* tre, double* tim);
 
+/// sum_(j != skip) (S + a K')_j q_j by the centroid rule, q = qre + i qim: the far part of a row's
+/// right-hand side without storing the row.
+std::complex<double> far_rhs(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k,
+                             double al, const double* qre, const double* qim, std::size_t skip);
+
+/// Matrix entries -K - a D by the centroid rule for the pairs (rows[r], cols[c]) into column-major
+/// (re, im) (m x n); pairs with rows[r] == cols[c] get meaningless values, to be replaced.
+void far_block(const FarGeometry& g, const uint32_t* rows, std::size_t m, const uint32_t* cols,
+               std::size_t n, double k, double al, double* re, double* im);
+
 }  // namespace chladni::precompute::bem_detail

@@ -6,11 +6,11 @@
 #include <string>
 #include <thread>
 
+#include "../parallel.hpp"
 #include "bem_kernels.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/precompute/bem.hpp"
-#include "parallel.hpp"
 
 namespace chladni::precompute {
 
