@@ -122,32 +122,39 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) std::complex<double
 }
 
 __attribute__((target_clones("avx512f", "avx2", "default"))) void far_block(
-    const FarGeometry& g, const uint32_t* __restrict rows, std::size_t m,
-    const uint32_t* __restrict cols, std::size_t n, double k, double al, double* __restrict re,
-    double* __restrict im) {
+    const FarGeometry& g, std::size_t row0, std::size_t m, std::size_t col0, std::size_t n,
+    double k, double al, double* __restrict re, double* __restrict im) {
+  const double* __restrict cx = g.cx.data();
+  const double* __restrict cy = g.cy.data();
+  const double* __restrict cz = g.cz.data();
+  const double* __restrict gnx = g.nx.data();
+  const double* __restrict gny = g.ny.data();
+  const double* __restrict gnz = g.nz.data();
+  const double* __restrict gw = g.w.data();
   // The inner loop runs along the longer side (a single row or column from ACA is a vector).
   if (m >= n) {
     for (std::size_t c = 0; c < n; ++c) {
-      const uint32_t j = cols[c];
-      const double y0 = g.cx[j], y1 = g.cy[j], y2 = g.cz[j], n0 = g.nx[j], n1 = g.ny[j],
-                   n2 = g.nz[j], w = g.w[j];
+      const std::size_t j = col0 + c;
+      const double y0 = cx[j], y1 = cy[j], y2 = cz[j], n0 = gnx[j], n1 = gny[j], n2 = gnz[j];
+      const double w = gw[j];
+      double* __restrict ore = re + c * m;
+      double* __restrict oim = im + c * m;
       for (std::size_t r = 0; r < m; ++r) {
-        const uint32_t i = rows[r];
+        const std::size_t i = row0 + r;
         double bre, bim;
-        pair_kernel(g.cx[i] - y0, g.cy[i] - y1, g.cz[i] - y2, g.nx[i], g.ny[i], g.nz[i], n0, n1, n2,
-                    w, k, al, re[c * m + r], im[c * m + r], bre, bim);
+        pair_kernel(cx[i] - y0, cy[i] - y1, cz[i] - y2, gnx[i], gny[i], gnz[i], n0, n1, n2, w, k,
+                    al, ore[r], oim[r], bre, bim);
       }
     }
   } else {
     for (std::size_t r = 0; r < m; ++r) {
-      const uint32_t i = rows[r];
-      const double x0 = g.cx[i], x1 = g.cy[i], x2 = g.cz[i], m0 = g.nx[i], m1 = g.ny[i],
-                   m2 = g.nz[i];
+      const std::size_t i = row0 + r;
+      const double x0 = cx[i], x1 = cy[i], x2 = cz[i], m0 = gnx[i], m1 = gny[i], m2 = gnz[i];
       for (std::size_t c = 0; c < n; ++c) {
-        const uint32_t j = cols[c];
+        const std::size_t j = col0 + c;
         double bre, bim;
-        pair_kernel(x0 - g.cx[j], x1 - g.cy[j], x2 - g.cz[j], m0, m1, m2, g.nx[j], g.ny[j], g.nz[j],
-                    g.w[j], k, al, re[c * m + r], im[c * m + r], bre, bim);
+        pair_kernel(x0 - cx[j], x1 - cy[j], x2 - cz[j], m0, m1, m2, gnx[j], gny[j], gnz[j], gw[j],
+                    k, al, re[c * m + r], im[c * m + r], bre, bim);
       }
     }
   }

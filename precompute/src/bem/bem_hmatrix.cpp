@@ -8,6 +8,7 @@
 
 #include <hmat/hmat.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -19,6 +20,8 @@
 
 namespace chladni::precompute::bem_detail {
 
+// Everything below is in hmat-oss's numbering of the elements (h), in which every block is a
+// contiguous range of rows and of columns; `client` maps it back to the mesh's.
 struct HMatrixSystem::Impl {
   const BemMesh& mesh;
   const BemSolver::NearCache& cache;
@@ -30,11 +33,14 @@ struct HMatrixSystem::Impl {
   hmat_matrix_t* matrix = nullptr;  // A at k
   hmat_matrix_t* lu = nullptr;      // LU of A at lu_k
   double k = 0, al = 0, lu_k = 0;
-  // Near corrections of A at k: by rows (row_start, cols, values) and the same entries by
-  // columns (col_start, col_rows, col_slot into values), for ACA's row and column requests.
-  std::vector<std::size_t> row_start, col_start, col_slot;
-  std::vector<uint32_t> cols, col_rows;
-  std::vector<cd> values, diagonal;
+  std::vector<int> client;  // h -> mesh element
+  FarGeometry geometry;     // in h order, so a block's centroids are contiguous
+  // Near corrections of A at k by rows (row_start; cols sorted ascending; values), and the same
+  // entries by columns (col_start; col_rows sorted ascending; col_slot into values), for ACA's
+  // row and column requests. slot[cache_start[i] + e]: where cache.rows[i][e] lives in values.
+  std::vector<std::size_t> row_start, col_start, col_slot, cache_start, slot;
+  std::vector<int> cols, col_rows;
+  std::vector<cd> values, diagonal;  // diagonal by mesh element
 
   Impl(const BemMesh& m, const BemSolver::NearCache& c, const BemOptions& o)
       : mesh(m), cache(c), options(o) {
@@ -48,24 +54,41 @@ struct HMatrixSystem::Impl {
     admissibility = hmat_create_admissibility_standard(2.0);
     if (!tree || !admissibility)
       throw InternalError("bem: hmat-oss could not build its cluster tree");
+    const int* order = hmat_cluster_get_indices(tree);
+    client.assign(order, order + n);
+    geometry = FarGeometry(c.far, order);
+    std::vector<int> h_of(n);
+    for (std::size_t h = 0; h < n; ++h) h_of[std::size_t(client[h])] = int(h);
+    cache_start.assign(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) cache_start[i + 1] = cache_start[i] + c.rows[i].size();
+    slot.resize(cache_start[n]);
+    cols.resize(cache_start[n]);
     row_start.assign(n + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) row_start[i + 1] = row_start[i] + c.rows[i].size();
-    cols.resize(row_start[n]);
-    std::vector<std::size_t> count(n + 1, 0);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t e = 0; e < c.rows[i].size(); ++e) {
-        cols[row_start[i] + e] = c.rows[i][e].j;
-        ++count[c.rows[i][e].j + 1];
+    std::vector<std::size_t> col_count(n + 1, 0);
+    std::vector<std::pair<int, std::size_t>> sorted;
+    for (std::size_t h = 0; h < n; ++h) {
+      const std::size_t i = std::size_t(client[h]);
+      row_start[h + 1] = row_start[h] + c.rows[i].size();
+      sorted.clear();
+      for (std::size_t e = 0; e < c.rows[i].size(); ++e)
+        sorted.push_back({h_of[c.rows[i][e].j], e});
+      std::sort(sorted.begin(), sorted.end());
+      for (std::size_t r = 0; r < sorted.size(); ++r) {
+        cols[row_start[h] + r] = sorted[r].first;
+        slot[cache_start[i] + sorted[r].second] = row_start[h] + r;
+        ++col_count[std::size_t(sorted[r].first) + 1];
       }
+    }
     col_start.assign(n + 1, 0);
-    for (std::size_t j = 0; j < n; ++j) col_start[j + 1] = col_start[j] + count[j + 1];
+    for (std::size_t j = 0; j < n; ++j) col_start[j + 1] = col_start[j] + col_count[j + 1];
     col_rows.resize(cols.size());
     col_slot.resize(cols.size());
     std::vector<std::size_t> fill(col_start.begin(), col_start.end() - 1);
-    for (std::size_t i = 0; i < n; ++i)
-      for (std::size_t s = row_start[i]; s < row_start[i + 1]; ++s) {
-        col_rows[fill[cols[s]]] = uint32_t(i);
-        col_slot[fill[cols[s]]++] = s;
+    for (std::size_t h = 0; h < n; ++h)  // ascending h: each column's rows come out sorted
+      for (std::size_t e = row_start[h]; e < row_start[h + 1]; ++e) {
+        const std::size_t j = std::size_t(cols[e]);
+        col_rows[fill[j]] = int(h);
+        col_slot[fill[j]++] = e;
       }
   }
   ~Impl() {
@@ -76,22 +99,14 @@ struct HMatrixSystem::Impl {
     if (clustering) hmat_delete_clustering(clustering);
   }
 
-  // One block request of hmat-oss (rows r0.., columns c0.., in its numbering).
-  struct Block {
+  struct Block {  // one block request of hmat-oss: rows row0.., columns col0..
     const Impl* self;
     int row0, col0;
-    const int *row_client, *col_client, *row_hmat, *col_hmat;
   };
-  static void prepare(int row_start, int, int col_start, int, int* row_h2c, int* row_c2h,
-                      int* col_h2c, int* col_c2h, void* context, hmat_block_info_t* info) {
+  static void prepare(int row_start, int, int col_start, int, int*, int*, int*, int*, void* context,
+                      hmat_block_info_t* info) {
     info->block_type = hmat_block_full;
-    info->user_data = new Block{static_cast<const Impl*>(context),
-                                row_start,
-                                col_start,
-                                row_h2c,
-                                col_h2c,
-                                row_c2h,
-                                col_c2h};
+    info->user_data = new Block{static_cast<const Impl*>(context), row_start, col_start};
     info->release_user_data = [](void* p) { delete static_cast<Block*>(p); };
   }
   // Column-major out (rows x cols) of the sub-block at (br, bc): full blocks, or one row or one
@@ -100,39 +115,32 @@ struct HMatrixSystem::Impl {
     const Block& b = *static_cast<const Block*>(data);
     const Impl& s = *b.self;
     cd* out = static_cast<cd*>(out_v);
-    const int r0 = b.row0 + br, c0 = b.col0 + bc;
-    thread_local std::vector<uint32_t> ri, ci;
+    const int r0 = b.row0 + br, c0 = b.col0 + bc, r1 = r0 + rows, c1 = c0 + ncols;
+    auto at = [&](int h, int g) -> cd& {
+      return out[std::size_t(h - r0) + std::size_t(g - c0) * std::size_t(rows)];
+    };
     thread_local std::vector<double> re, im;
-    ri.assign(b.row_client + r0, b.row_client + r0 + rows);
-    ci.assign(b.col_client + c0, b.col_client + c0 + ncols);
     const std::size_t size = std::size_t(rows) * std::size_t(ncols);
     re.resize(size);
     im.resize(size);
-    far_block(s.cache.far, ri.data(), ri.size(), ci.data(), ci.size(), s.k, s.al, re.data(),
-              im.data());
+    far_block(s.geometry, std::size_t(r0), std::size_t(rows), std::size_t(c0), std::size_t(ncols),
+              s.k, s.al, re.data(), im.data());
     for (std::size_t e = 0; e < size; ++e) out[e] = cd(re[e], im[e]);
-    for (int c = 0; c < ncols; ++c) {
-      const int r = b.row_hmat[ci[std::size_t(c)]] - r0;  // the diagonal: the self term
-      if (r >= 0 && r < rows)
-        out[std::size_t(r) + std::size_t(c) * std::size_t(rows)] = s.diagonal[ci[std::size_t(c)]];
-    }
+    for (int h = std::max(r0, c0); h < std::min(r1, c1); ++h)
+      at(h, h) = s.diagonal[std::size_t(s.client[std::size_t(h)])];  // the self term
     if (rows <= ncols) {
-      for (int r = 0; r < rows; ++r) {
-        const std::size_t i = std::size_t(b.row_client[r0 + r]);
-        for (std::size_t e = s.row_start[i]; e < s.row_start[i + 1]; ++e) {
-          const int c = b.col_hmat[s.cols[e]] - c0;
-          if (c >= 0 && c < ncols)
-            out[std::size_t(r) + std::size_t(c) * std::size_t(rows)] += s.values[e];
-        }
+      for (int h = r0; h < r1; ++h) {
+        const int* first = s.cols.data() + s.row_start[std::size_t(h)];
+        const int* last = s.cols.data() + s.row_start[std::size_t(h) + 1];
+        for (const int* e = std::lower_bound(first, last, c0); e != last && *e < c1; ++e)
+          at(h, *e) += s.values[std::size_t(e - s.cols.data())];
       }
     } else {
-      for (int c = 0; c < ncols; ++c) {
-        const std::size_t j = std::size_t(b.col_client[c0 + c]);
-        for (std::size_t e = s.col_start[j]; e < s.col_start[j + 1]; ++e) {
-          const int r = b.row_hmat[s.col_rows[e]] - r0;
-          if (r >= 0 && r < rows)
-            out[std::size_t(r) + std::size_t(c) * std::size_t(rows)] += s.values[s.col_slot[e]];
-        }
+      for (int g = c0; g < c1; ++g) {
+        const int* first = s.col_rows.data() + s.col_start[std::size_t(g)];
+        const int* last = s.col_rows.data() + s.col_start[std::size_t(g) + 1];
+        for (const int* e = std::lower_bound(first, last, r0); e != last && *e < r1; ++e)
+          at(*e, g) += s.values[s.col_slot[std::size_t(e - s.col_rows.data())]];
       }
     }
   }
@@ -161,9 +169,9 @@ void HMatrixSystem::assemble(double k, std::span<const cd> q, std::vector<cd>& b
   parallel_for(n, s.options.threads, [&](std::size_t i0, std::size_t i1) {
     for (std::size_t i = i0; i < i1; ++i) {
       cd rhs = far_rhs(s.cache.far, m.centroid[i], m.normal[i], k, s.al, qre.data(), qim.data(), i);
-      std::size_t slot = s.row_start[i];
+      std::size_t e = s.cache_start[i];
       near_row(m, s.cache, k, alpha, i, [&](uint32_t j, cd da, cd db) {
-        s.values[slot++] = da;
+        s.values[s.slot[e++]] = da;
         rhs += db * q[j];
       });
       const SelfTerms self = self_terms(m, s.cache, k, alpha, s.options, i);

@@ -100,12 +100,21 @@ inline Vec3 barycentric(const Vec3& a, const Vec3& b, const Vec3& c,
 /// Element centroids, normals and area / (4 pi) as separate arrays, for far_row.
 struct FarGeometry {
   std::vector<double> cx, cy, cz, nx, ny, nz, w;
+  FarGeometry() = default;
   explicit FarGeometry(const BemMesh& m) {
     for (std::size_t j = 0; j < m.elements(); ++j) {
       cx.push_back(m.centroid[j][0]), cy.push_back(m.centroid[j][1]);
       cz.push_back(m.centroid[j][2]), nx.push_back(m.normal[j][0]);
       ny.push_back(m.normal[j][1]), nz.push_back(m.normal[j][2]);
       w.push_back(m.area[j] / (4 * std::numbers::pi));
+    }
+  }
+  /// g's elements in another order: element h here is g's order[h].
+  FarGeometry(const FarGeometry& g, const int* order) {
+    for (std::size_t h = 0; h < g.cx.size(); ++h) {
+      const std::size_t j = std::size_t(order[h]);
+      cx.push_back(g.cx[j]), cy.push_back(g.cy[j]), cz.push_back(g.cz[j]);
+      nx.push_back(g.nx[j]), ny.push_back(g.ny[j]), nz.push_back(g.nz[j]), w.push_back(g.w[j]);
     }
   }
 };
@@ -121,9 +130,10 @@ void far_row(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k, doub
 std::complex<double> far_rhs(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k,
                              double al, const double* qre, const double* qim, std::size_t skip);
 
-/// Matrix entries -K - a D by the centroid rule for the pairs (rows[r], cols[c]) into column-major
-/// (re, im) (m x n); pairs with rows[r] == cols[c] get meaningless values, to be replaced.
-void far_block(const FarGeometry& g, const uint32_t* rows, std::size_t m, const uint32_t* cols,
+/// Matrix entries -K - a D by the centroid rule for the pairs (row0 + r, col0 + c) of g's
+/// elements into column-major (re, im) (m x n); pairs of an element with itself get meaningless
+/// values, to be replaced.
+void far_block(const FarGeometry& g, std::size_t row0, std::size_t m, std::size_t col0,
                std::size_t n, double k, double al, double* re, double* im);
 
 }  // namespace chladni::precompute::bem_detail
