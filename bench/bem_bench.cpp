@@ -6,7 +6,7 @@
 // Above BemOptions::hmatrix_limit elements the system is a hierarchical matrix; "LU" is then its
 // hierarchical LU.
 // Usage: chladni_bem_bench [SURFACE ...] [--freq HZ] [--steps N] [--step REL] [--backend cpu|gpu]
-//                          [--refactor-phase RAD] [--json OUT]
+//                          [--refactor-phase RAD] [--hmatrix-limit N] [--json OUT]
 //        (gpu: the centroid-rule rows on the Vulkan device, kernels/bem_far.comp)
 //        SURFACE: icosphere:L, FILE or FILE@S (default icosphere:3 icosphere:4 meshes/bowl.obj)
 #include <chrono>
@@ -43,12 +43,15 @@ int main(int argc, char** argv) {
   double freq = 2000;
   int steps = 3;
   double step = 0.005, refactor_phase = -1;
+  long hmatrix_limit = -1;
   std::string json_path, backend = "cpu";
   for (int i = 1; i < argc; ++i) {
     if (!std::strcmp(argv[i], "--freq") && i + 1 < argc)
       freq = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--steps") && i + 1 < argc)
       steps = std::stoi(argv[++i]);
+    else if (!std::strcmp(argv[i], "--hmatrix-limit") && i + 1 < argc)
+      hmatrix_limit = std::stol(argv[++i]);
     else if (!std::strcmp(argv[i], "--refactor-phase") && i + 1 < argc)
       refactor_phase = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--step") && i + 1 < argc)
@@ -68,6 +71,7 @@ int main(int argc, char** argv) {
     const precompute::BemMesh mesh(load(name));
     precompute::BemOptions o;
     if (refactor_phase >= 0) o.refactor_phase = refactor_phase;
+    if (hmatrix_limit >= 0) o.hmatrix_limit = std::size_t(hmatrix_limit);
     if (backend == "gpu") o.gpu = std::make_shared<gpu::Context>();
     precompute::BemSolver solver(mesh, o);
     std::vector<cd> q(mesh.elements());

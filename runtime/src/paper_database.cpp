@@ -311,6 +311,7 @@ PaperSoundDb load_paper_database(const std::string& dir) {
   db.friction_reference_speed = r.positive("friction_reference_speed", 0.1);
   if (r.has("description")) db.description = r.string("description");
   const json& entries = r.array("entries");
+  if (entries.empty()) json_reader::fail(r.at("entries"), "no entries");
   const auto read = [&](const json& name, const std::string& path) {
     if (!name.is_string()) json_reader::fail(path, "expected a file name");
     const std::string file = (fs::path(dir) / name.get<std::string>()).string();
@@ -372,7 +373,11 @@ PaperSoundDb load_paper_database(const std::string& dir) {
     db.entries.push_back(std::move(entry));
   }
   r.done();
-  db.validate();
+  try {
+    db.validate();
+  } catch (const InputError& e) {
+    json_reader::fail(index, e.what());
+  }
   return db;
 }
 
