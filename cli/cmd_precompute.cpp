@@ -297,7 +297,7 @@ void add_precompute(CLI::App& app, bool run) {
          "--transfer-method", a->transfer_method,
          "Surface pressure per mode: bem (Burton-Miller boundary elements), sources "
          "(equivalent-source fit) or auto (per mode: BEM where the surface has 6 elements per "
-         "wavelength and at most 8000 triangles, else sources)")
+         "wavelength and at most 12000 elements, else sources)")
       ->capture_default_str();
   cmd->add_option("--transfer-backend", a->transfer_backend,
                   "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")

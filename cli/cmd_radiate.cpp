@@ -225,7 +225,7 @@ void add_radiate(CLI::App& app) {
          "--method", a->method,
          "Surface pressure: bem (Burton-Miller boundary elements), sources "
          "(equivalent-source fit) or auto (BEM where the surface has 6 elements per wavelength "
-         "and at most 8000 triangles, else sources)")
+         "and at most 12000 elements, else sources)")
       ->capture_default_str();
   cmd->add_option("--via", a->via,
                   "Evaluate directly from the surface solution (surface; 'sources' is its old "

@@ -25,8 +25,9 @@ struct AcousticOptions {
   /// (bem_elements_per_wavelength) and has at most bem_auto_elements triangles, else sources.
   enum class Method { Auto, Bem, Sources };
   Method method = Method::Auto;
-  /// The dense BEM system costs 16 N^2 bytes (1 GB at 8000) and an LU of 8/3 N^3 flops.
-  std::size_t bem_auto_elements = 8000;
+  /// auto's cap: the dense system below BemOptions::hmatrix_limit (16 N^2 bytes, 1 GB at 8000),
+  /// a hierarchical one above (2.5 GB and ~10 s per LU at 10,880 elements on 2 cores).
+  std::size_t bem_auto_elements = 12000;
   /// bem: split the surface's triangles up to this many elements (above BemOptions::
   /// hmatrix_limit the system is a hierarchical matrix: about 1 GB and 20-60 s per frequency
   /// at 26,000 elements on 2 cores).
