@@ -26,9 +26,6 @@ extern "C" void zherk_(const char* uplo, const char* trans, const int* n, const 
 namespace chladni::precompute {
 namespace {
 
-// Modes are fitted in parallel, one per core: a threaded BLAS inside each fit would only
-// oversubscribe the cores (measured: 1.6x slower on 2 cores). SingleThreadedBlas holds it off.
-
 using cd = std::complex<double>;
 
 double dist2(const Vec3& a, const Vec3& b) {
@@ -442,6 +439,8 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
   };
   compute_transfer_bem(surface, bank, by_bem, o, modes, coeffs, &total, tick);
   std::exception_ptr error;
+  // Modes are fitted in parallel, one per core: a threaded BLAS inside each fit would only
+  // oversubscribe the cores (measured: 1.6x slower on 2 cores).
   std::optional<SingleThreadedBlas> blas;
   if (o.threads != 1 && by_sources.size() > 1) blas.emplace();
   parallel_for(by_sources.size(), o.threads, [&](std::size_t b, std::size_t e) {

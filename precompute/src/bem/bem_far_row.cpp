@@ -75,43 +75,52 @@ inline void pair_kernel(double r0, double r1, double r2, double m0, double m1, d
   bim = gim + al * kpre;
 }
 
+// The point x (normal nxv) against elements j0 .. j0 + len of g, indexed from 0: the weights
+// S + a K' into (bre, bim) and, with kEntries, the matrix entries -K - a D into (are, aim)
+// (without, their arithmetic is dead and the compiler drops it). The loop the assembly spends its
+// time in; inlined into each instruction-set clone below.
+template <bool kEntries>
+inline void point_against(const FarGeometry& g, const Vec3& x, const Vec3& nxv, std::size_t j0,
+                          std::size_t len, double k, double al, double* __restrict are,
+                          double* __restrict aim, double* __restrict bre, double* __restrict bim) {
+  const double x0 = x[0], x1 = x[1], x2 = x[2], m0 = nxv[0], m1 = nxv[1], m2 = nxv[2];
+  const double* __restrict cx = g.cx.data() + j0;
+  const double* __restrict cy = g.cy.data() + j0;
+  const double* __restrict cz = g.cz.data() + j0;
+  const double* __restrict gnx = g.nx.data() + j0;
+  const double* __restrict gny = g.ny.data() + j0;
+  const double* __restrict gnz = g.nz.data() + j0;
+  const double* __restrict gw = g.w.data() + j0;
+  // The outputs never overlap the geometry (restrict does not always survive inlining).
+#pragma GCC ivdep
+  for (std::size_t l = 0; l < len; ++l) {
+    double ere, eim;
+    pair_kernel(x0 - cx[l], x1 - cy[l], x2 - cz[l], m0, m1, m2, gnx[l], gny[l], gnz[l], gw[l], k,
+                al, ere, eim, bre[l], bim[l]);
+    if constexpr (kEntries) are[l] = ere, aim[l] = eim;
+  }
+}
+
 }  // namespace
 
 __attribute__((target_clones("avx512f", "avx2", "default"))) void far_row(
     const FarGeometry& g, const Vec3& x, const Vec3& nxv, double k, double al,
     double* __restrict rre, double* __restrict rim, double* __restrict tre,
     double* __restrict tim) {
-  const std::size_t n = g.cx.size();
-  const double x0 = x[0], x1 = x[1], x2 = x[2], m0 = nxv[0], m1 = nxv[1], m2 = nxv[2];
-  const double* __restrict cx = g.cx.data();
-  const double* __restrict cy = g.cy.data();
-  const double* __restrict cz = g.cz.data();
-  const double* __restrict gnx = g.nx.data();
-  const double* __restrict gny = g.ny.data();
-  const double* __restrict gnz = g.nz.data();
-  const double* __restrict gw = g.w.data();
-  for (std::size_t j = 0; j < n; ++j)
-    pair_kernel(x0 - cx[j], x1 - cy[j], x2 - cz[j], m0, m1, m2, gnx[j], gny[j], gnz[j], gw[j], k,
-                al, rre[j], rim[j], tre[j], tim[j]);
+  point_against<true>(g, x, nxv, 0, g.cx.size(), k, al, rre, rim, tre, tim);
 }
 
 __attribute__((target_clones("avx512f", "avx2", "default"))) std::complex<double> far_rhs(
     const FarGeometry& g, const Vec3& x, const Vec3& nxv, double k, double al,
     const double* __restrict qre, const double* __restrict qim, std::size_t skip) {
   const std::size_t n = g.cx.size();
-  const double x0 = x[0], x1 = x[1], x2 = x[2], m0 = nxv[0], m1 = nxv[1], m2 = nxv[2];
-  // Kernels a chunk at a time (a loop that vectorizes as far_row's does), then the sum.
+  // Weights a chunk at a time, then the sum.
   constexpr std::size_t kChunk = 256;
   double bre[kChunk], bim[kChunk];
   double re = 0, im = 0;
   for (std::size_t j0 = 0; j0 < n; j0 += kChunk) {
     const std::size_t len = std::min(kChunk, n - j0);
-    for (std::size_t l = 0; l < len; ++l) {
-      const std::size_t j = j0 + l;
-      double are, aim;
-      pair_kernel(x0 - g.cx[j], x1 - g.cy[j], x2 - g.cz[j], m0, m1, m2, g.nx[j], g.ny[j], g.nz[j],
-                  g.w[j], k, al, are, aim, bre[l], bim[l]);
-    }
+    point_against<false>(g, x, nxv, j0, len, k, al, nullptr, nullptr, bre, bim);
     if (skip >= j0 && skip < j0 + len) bre[skip - j0] = bim[skip - j0] = 0;  // infinite there
     for (std::size_t l = 0; l < len; ++l) {
       re += bre[l] * qre[j0 + l] - bim[l] * qim[j0 + l];

@@ -1,10 +1,10 @@
 // Assembly of the Burton-Miller system and its solution: LAPACK's LU (zgetrf/zgetrs through the
 // BLAS) for small systems, restarted GMRES preconditioned by the LU of a nearby frequency for
 // large ones.
-#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <string>
 
@@ -201,12 +201,56 @@ struct BemSolver::Lu {
 
 namespace {
 
-double residual(const std::vector<cd>& A, const std::vector<cd>& b, const std::vector<cd>& x) {
+double relative_residual(const MatVec& apply, const std::vector<cd>& b, const std::vector<cd>& x) {
   const std::size_t n = b.size();
-  std::vector<cd> ax(n);
-  matvec(A, n, x.data(), ax.data());
+  std::vector<cd> ax(n + kPad);
+  apply(x.data(), ax.data());
   for (std::size_t i = 0; i < n; ++i) ax[i] -= b[i];
+  ax.resize(n);
   return norm2(ax) / norm2(b);
+}
+
+// Throws on a non-finite b; for b = 0 sets the zero pressure and returns true.
+bool zero_right_hand_side(const std::vector<cd>& b, BemSolver::Result& res) {
+  const double nb = norm2(b);
+  if (!std::isfinite(nb)) throw InternalError("bem: the right-hand side is not finite");
+  if (nb > 0) return false;
+  res.pressure.assign(b.size(), cd(0.0));
+  return true;
+}
+
+// GMRES preconditioned by the factors of the last factorized frequency (factor_k(): NaN when
+// there are none). Factors of a frequency within 1 / extent precondition GMRES in under ~40
+// iterations (the phase of e^(ikR) across the object moves by less than 1 rad; on the bowl at
+// 3 kHz, 21 iterations at 0.7 rad, 39 at 1.4, no convergence in 60 at 2.1); farther ones are not
+// worth trying: factorize here first. If GMRES fails with older factors, factorize here and
+// solve again. Returns the seconds spent iterating; x holds n + pad entries.
+double gmres_with_nearby_factors(double k, double extent, const BemOptions& o,
+                                 const std::function<double()>& factor_k,
+                                 const std::function<void()>& factorize, const MatVec& apply,
+                                 const Precondition& precondition, const std::vector<cd>& b,
+                                 std::size_t pad, BemSolver::Result& res, std::vector<cd>& x) {
+  if (!(std::abs(k - factor_k()) * extent <= o.refactor_phase)) factorize();
+  auto t0 = std::chrono::steady_clock::now();
+  res.iterations = gmres(apply, precondition, b, o, pad, x);
+  res.residual = relative_residual(apply, b, x);
+  double seconds = seconds_since(t0);
+  if (!(res.residual <= 10 * o.gmres_tolerance) && factor_k() != k) {
+    factorize();
+    t0 = std::chrono::steady_clock::now();
+    std::fill(x.begin(), x.end(), cd(0.0));
+    res.iterations += gmres(apply, precondition, b, o, pad, x);
+    res.residual = relative_residual(apply, b, x);
+    seconds += seconds_since(t0);
+  }
+  return seconds;
+}
+
+void check_converged(const BemSolver::Result& res, const BemOptions& o) {
+  if (!(res.residual <= 10 * o.gmres_tolerance))
+    throw InternalError("bem: the solve did not converge (relative residual " +
+                        std::to_string(res.residual) + " after " + std::to_string(res.iterations) +
+                        " GMRES iterations)");
 }
 
 }  // namespace
@@ -238,17 +282,6 @@ BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   return res;
 }
 
-namespace {
-
-void check_converged(const BemSolver::Result& res, const BemOptions& o) {
-  if (!(res.residual <= 10 * o.gmres_tolerance))
-    throw InternalError("bem: the solve did not converge (relative residual " +
-                        std::to_string(res.residual) + " after " + std::to_string(res.iterations) +
-                        " GMRES iterations)");
-}
-
-}  // namespace
-
 BemSolver::Result BemSolver::solve_dense(double k, std::span<const cd> q) {
   const std::size_t n = mesh_.elements();
   auto t0 = std::chrono::steady_clock::now();
@@ -258,12 +291,7 @@ BemSolver::Result BemSolver::solve_dense(double k, std::span<const cd> q) {
   times_.assembly += seconds_since(t0);
 
   Result res;
-  const double nb = norm2(b);
-  if (!std::isfinite(nb)) throw InternalError("bem: the right-hand side is not finite");
-  if (!(nb > 0)) {
-    res.pressure.assign(n, cd(0.0));
-    return res;
-  }
+  if (zero_right_hand_side(b, res)) return res;
   auto factorize = [&](bool single) {
     const auto tf = std::chrono::steady_clock::now();
     if (!lu_) lu_ = std::make_unique<Lu>();
@@ -275,7 +303,7 @@ BemSolver::Result BemSolver::solve_dense(double k, std::span<const cd> q) {
     times_.factorization += seconds_since(tf);
     res.factorized = true;
   };
-  t0 = std::chrono::steady_clock::now();
+  const MatVec apply = [&](const cd* in, cd* out) { matvec(A, n, in, out); };
   std::vector<cd> x(n, cd(0.0));
   if (n <= options_.direct_limit) {
     factorize(false);
@@ -283,27 +311,11 @@ BemSolver::Result BemSolver::solve_dense(double k, std::span<const cd> q) {
     std::copy(b.begin(), b.end(), x.begin());
     lu_->solve(x.data());
     x.resize(n);
-    res.residual = residual(A, b, x);
+    res.residual = relative_residual(apply, b, x);
   } else {
-    // Factors of a frequency within 1 / extent precondition GMRES in under ~40 iterations (the
-    // phase of e^(ikR) across the object moves by less than 1 rad; on the bowl at 3 kHz, 21
-    // iterations at 0.7 rad, 39 at 1.4, no convergence in 60 at 2.1); farther ones are not worth
-    // trying: factorize here.
-    if (!lu_ || std::abs(k - lu_->k) * extent_ > options_.refactor_phase) factorize(true);
-    const MatVec apply = [&](const cd* in, cd* out) { matvec(A, n, in, out); };
-    const Precondition precondition = [&](cd* v) { lu_->solve(v); };
-    t0 = std::chrono::steady_clock::now();
-    res.iterations = gmres(apply, precondition, b, options_, kPad, x);
-    res.residual = residual(A, b, x);
-    if (!(res.residual <= 10 * options_.gmres_tolerance) && lu_->k != k) {
-      times_.iteration += seconds_since(t0);
-      factorize(true);
-      t0 = std::chrono::steady_clock::now();
-      std::fill(x.begin(), x.end(), cd(0.0));
-      res.iterations += gmres(apply, precondition, b, options_, kPad, x);
-      res.residual = residual(A, b, x);
-    }
-    times_.iteration += seconds_since(t0);
+    times_.iteration += gmres_with_nearby_factors(
+        k, extent_, options_, [&] { return lu_ ? lu_->k : NAN; }, [&] { factorize(true); }, apply,
+        [&](cd* v) { lu_->solve(v); }, b, kPad, res, x);
   }
   check_converged(res, options_);
   res.pressure.assign(x.begin(), x.begin() + long(n));
@@ -320,41 +332,18 @@ BemSolver::Result BemSolver::solve_hierarchical(double k, std::span<const cd> q)
   hmatrix_->assemble(k, q, b);
   times_.assembly += seconds_since(t0);
   Result res;
-  if (!std::isfinite(norm2(b))) throw InternalError("bem: the right-hand side is not finite");
-  if (!(norm2(b) > 0)) {
-    res.pressure.assign(n, cd(0.0));
-    return res;
-  }
+  if (zero_right_hand_side(b, res)) return res;
   auto factorize = [&] {
     const auto tf = std::chrono::steady_clock::now();
     hmatrix_->factorize();
     times_.factorization += seconds_since(tf);
     res.factorized = true;
   };
-  if (!hmatrix_->factorized() ||
-      std::abs(k - hmatrix_->factor_k()) * extent_ > options_.refactor_phase)
-    factorize();
-  const MatVec apply = [&](const cd* in, cd* out) { hmatrix_->apply(in, out); };
-  const Precondition precondition = [&](cd* v) { hmatrix_->precondition(v); };
-  auto relative_residual = [&](const std::vector<cd>& x) {
-    std::vector<cd> ax(n);
-    hmatrix_->apply(x.data(), ax.data());
-    for (std::size_t i = 0; i < n; ++i) ax[i] -= b[i];
-    return norm2(ax) / norm2(b);
-  };
-  t0 = std::chrono::steady_clock::now();
   std::vector<cd> x(n, cd(0.0));
-  res.iterations = gmres(apply, precondition, b, options_, 0, x);
-  res.residual = relative_residual(x);
-  if (!(res.residual <= 10 * options_.gmres_tolerance) && hmatrix_->factor_k() != k) {
-    times_.iteration += seconds_since(t0);
-    factorize();
-    t0 = std::chrono::steady_clock::now();
-    std::fill(x.begin(), x.end(), cd(0.0));
-    res.iterations += gmres(apply, precondition, b, options_, 0, x);
-    res.residual = relative_residual(x);
-  }
-  times_.iteration += seconds_since(t0);
+  times_.iteration += gmres_with_nearby_factors(
+      k, extent_, options_, [&] { return hmatrix_->factorized() ? hmatrix_->factor_k() : NAN; },
+      factorize, [&](const cd* in, cd* out) { hmatrix_->apply(in, out); },
+      [&](cd* v) { hmatrix_->precondition(v); }, b, 0, res, x);
   check_converged(res, options_);
   res.pressure = std::move(x);
   return res;
