@@ -6,6 +6,7 @@
 #include <complex>
 #include <cstdint>
 #include <numbers>
+#include <span>
 
 #include "bem_kernels.hpp"
 
@@ -110,24 +111,30 @@ __attribute__((target_clones("avx512f", "avx2", "default"))) void far_row(
   point_against<true>(g, x, nxv, 0, g.cx.size(), k, al, rre, rim, tre, tim);
 }
 
-__attribute__((target_clones("avx512f", "avx2", "default"))) std::complex<double> far_rhs(
+__attribute__((target_clones("avx512f", "avx2", "default"))) void far_rhs(
     const FarGeometry& g, const Vec3& x, const Vec3& nxv, double k, double al,
-    const double* __restrict qre, const double* __restrict qim, std::size_t skip) {
-  const std::size_t n = g.cx.size();
-  // Weights a chunk at a time, then the sum.
+    std::span<const double* const> qre, std::span<const double* const> qim, std::size_t skip,
+    std::complex<double>* out) {
+  const std::size_t n = g.cx.size(), count = qre.size();
+  // Weights a chunk at a time, then each sum.
   constexpr std::size_t kChunk = 256;
   double bre[kChunk], bim[kChunk];
-  double re = 0, im = 0;
+  std::fill(out, out + count, std::complex<double>(0.0));
   for (std::size_t j0 = 0; j0 < n; j0 += kChunk) {
     const std::size_t len = std::min(kChunk, n - j0);
     point_against<false>(g, x, nxv, j0, len, k, al, nullptr, nullptr, bre, bim);
     if (skip >= j0 && skip < j0 + len) bre[skip - j0] = bim[skip - j0] = 0;  // infinite there
-    for (std::size_t l = 0; l < len; ++l) {
-      re += bre[l] * qre[j0 + l] - bim[l] * qim[j0 + l];
-      im += bre[l] * qim[j0 + l] + bim[l] * qre[j0 + l];
+    for (std::size_t v = 0; v < count; ++v) {
+      const double* __restrict pr = qre[v] + j0;
+      const double* __restrict pi = qim[v] + j0;
+      double re = 0, im = 0;
+      for (std::size_t l = 0; l < len; ++l) {
+        re += bre[l] * pr[l] - bim[l] * pi[l];
+        im += bre[l] * pi[l] + bim[l] * pr[l];
+      }
+      out[v] += std::complex<double>(re, im);
     }
   }
-  return {re, im};
 }
 
 __attribute__((target_clones("avx512f", "avx2", "default"))) void far_block(

@@ -152,31 +152,39 @@ HMatrixSystem::HMatrixSystem(const BemMesh& mesh, const BemSolver::NearCache& ca
 
 HMatrixSystem::~HMatrixSystem() = default;
 
-void HMatrixSystem::assemble(double k, std::span<const cd> q, std::vector<cd>& b) {
+void HMatrixSystem::assemble(double k, std::span<const std::vector<cd>> qs,
+                             std::vector<std::vector<cd>>& bs) {
   Impl& s = *impl_;
   const BemMesh& m = s.mesh;
-  const std::size_t n = m.elements();
+  const std::size_t n = m.elements(), count = qs.size();
   const cd alpha = coupling(m, k, s.options);
   s.k = k;
   s.al = alpha.imag();
   s.values.resize(s.cols.size());
   s.diagonal.resize(n);
-  b.assign(n, cd(0.0));
+  bs.assign(count, std::vector<cd>(n, cd(0.0)));
   // Per row: the near corrections, the self term, and b_i = -(alpha/2) q_i - sum_j B_ij q_j with
-  // the centroid rule's B row (far_rhs) corrected near i.
-  std::vector<double> qre(n), qim(n);
-  for (std::size_t j = 0; j < n; ++j) qre[j] = q[j].real(), qim[j] = q[j].imag();
+  // the centroid rule's B row (far_rhs) corrected near i, for every q at once.
+  std::vector<std::vector<double>> qre(count, std::vector<double>(n)), qim = qre;
+  std::vector<const double*> pre(count), pim(count);
+  for (std::size_t v = 0; v < count; ++v) {
+    for (std::size_t j = 0; j < n; ++j) qre[v][j] = qs[v][j].real(), qim[v][j] = qs[v][j].imag();
+    pre[v] = qre[v].data();
+    pim[v] = qim[v].data();
+  }
   parallel_for(n, s.options.threads, [&](std::size_t i0, std::size_t i1) {
+    std::vector<cd> rhs(count);
     for (std::size_t i = i0; i < i1; ++i) {
-      cd rhs = far_rhs(s.cache.far, m.centroid[i], m.normal[i], k, s.al, qre.data(), qim.data(), i);
+      far_rhs(s.cache.far, m.centroid[i], m.normal[i], k, s.al, pre, pim, i, rhs.data());
       std::size_t e = s.cache_start[i];
       near_row(m, s.cache, k, alpha, i, [&](uint32_t j, cd da, cd db) {
         s.values[s.slot[e++]] = da;
-        rhs += db * q[j];
+        for (std::size_t v = 0; v < count; ++v) rhs[v] += db * qs[v][j];
       });
       const SelfTerms self = self_terms(m, s.cache, k, alpha, s.options, i);
       s.diagonal[i] = self.a;
-      b[i] = -0.5 * alpha * q[i] - rhs - self.b * q[i];
+      for (std::size_t v = 0; v < count; ++v)
+        bs[v][i] = -0.5 * alpha * qs[v][i] - rhs[v] - self.b * qs[v][i];
     }
   });
   const SingleThreadedBlas blas;

@@ -19,9 +19,9 @@ class HMatrixSystem {
   HMatrixSystem(const HMatrixSystem&) = delete;
   HMatrixSystem& operator=(const HMatrixSystem&) = delete;
 
-  /// Compresses A(k) (relative accuracy o.hmatrix_epsilon) and returns the right-hand side
-  /// b = B q exactly (centroid rule over all elements plus the near corrections).
-  void assemble(double k, std::span<const cd> q, std::vector<cd>& b);
+  /// Compresses A(k) (relative accuracy o.hmatrix_epsilon) and returns the right-hand sides
+  /// bs[v] = B qs[v] exactly (centroid rule over all elements plus the near corrections).
+  void assemble(double k, std::span<const std::vector<cd>> qs, std::vector<std::vector<cd>>& bs);
   /// y = A x for the last assembled k (element numbering).
   void apply(const cd* x, cd* y) const;
   /// Hierarchical LU of the last assembled A at the coarser o.hmatrix_lu_epsilon: the

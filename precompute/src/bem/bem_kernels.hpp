@@ -5,6 +5,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <span>
 #include <vector>
 
 #include "chladni/core/vec3.hpp"
@@ -125,10 +126,11 @@ struct FarGeometry {
 void far_row(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k, double al, double* rre,
              double* rim, double* tre, double* tim);
 
-/// sum_(j != skip) (S + a K')_j q_j by the centroid rule, q = qre + i qim: the far part of a row's
-/// right-hand side without storing the row.
-std::complex<double> far_rhs(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k,
-                             double al, const double* qre, const double* qim, std::size_t skip);
+/// out[v] = sum_(j != skip) (S + a K')_j q_j for each right-hand side q = qre[v] + i qim[v] by
+/// the centroid rule: the far part of a row's right-hand sides without storing the row.
+void far_rhs(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k, double al,
+             std::span<const double* const> qre, std::span<const double* const> qim,
+             std::size_t skip, std::complex<double>* out);
 
 /// Matrix entries -K - a D by the centroid rule for the pairs (row0 + r, col0 + c) of g's
 /// elements into column-major (re, im) (m x n); pairs of an element with itself get meaningless

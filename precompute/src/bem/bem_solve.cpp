@@ -83,41 +83,59 @@ SelfTerms self_terms(const BemMesh& m, const BemSolver::NearCache& cache, double
 
 namespace {
 
-// Row i of A (into `row`, which holds the centroid-rule entries with a 0 diagonal) and b_i,
-// given the far part of the right-hand side sum_(j != i) (S + a K')_j q_j: the near elements get
-// their corrections, the diagonal the self term.
-cd finish_row(const BemMesh& m, const BemSolver::NearCache& cache, double k, cd alpha,
-              std::span<const cd> q, const BemOptions& o, std::size_t i, cd far_rhs, cd* row) {
-  cd bi = -0.5 * alpha * q[i] - far_rhs;
+// Row i of A (into `row`, which holds the centroid-rule entries with a 0 diagonal) and b_i of
+// every right-hand side, given the far parts of their sums sum_(j != i) (S + a K')_j q_j in
+// b_i: the near elements get their corrections, the diagonal the self term.
+void finish_row(const BemMesh& m, const BemSolver::NearCache& cache, double k, cd alpha,
+                std::span<const std::vector<cd>> qs, const BemOptions& o, std::size_t i,
+                std::vector<std::vector<cd>>& bs, cd* row) {
+  const std::size_t count = qs.size();
+  for (std::size_t v = 0; v < count; ++v) bs[v][i] = -0.5 * alpha * qs[v][i] - bs[v][i];
   near_row(m, cache, k, alpha, i, [&](uint32_t j, cd da, cd db) {
     row[j] += da;
-    bi -= db * q[j];
+    for (std::size_t v = 0; v < count; ++v) bs[v][i] -= db * qs[v][j];
   });
   const SelfTerms self = self_terms(m, cache, k, alpha, o, i);
   row[i] = self.a;
-  return bi - self.b * q[i];
+  for (std::size_t v = 0; v < count; ++v) bs[v][i] -= self.b * qs[v][i];
 }
 
-// Row-major A (A[i * n + j]: collocation point i, element j) and b = B q: every row first by
-// the centroid rule (far_row, or the device's rows), then finish_row.
+// Row-major A (A[i * n + j]: collocation point i, element j) and bs[v] = B qs[v]: every row
+// first by the centroid rule (far_row, or the device's rows), then finish_row.
 void assemble(const BemMesh& m, const BemSolver::NearCache& cache, BemGpuRows* gpu, double k,
-              std::span<const cd> q, const BemOptions& o, std::vector<cd>& A, std::vector<cd>& b) {
-  const std::size_t n = m.elements();
+              std::span<const std::vector<cd>> qs, const BemOptions& o, std::vector<cd>& A,
+              std::vector<std::vector<cd>>& bs) {
+  const std::size_t n = m.elements(), count = qs.size();
   // Every entry is written below: reuse the buffer rather than zero-filling (and page-faulting)
   // hundreds of megabytes per frequency.
   if (A.size() != n * n + kPad) A.assign(n * n + kPad, cd(0.0));
-  b.assign(n, cd(0.0));
+  bs.assign(count, std::vector<cd>(n, cd(0.0)));
   const cd alpha = coupling(m, k, o);
   if (gpu) {  // centroid-rule rows on the device, block by block; the rest on the CPU
+    // The device sums the first right-hand side; any others are summed here.
+    std::vector<std::vector<double>> qre(count, std::vector<double>(n)), qim = qre;
+    std::vector<const double*> pre, pim;
+    for (std::size_t v = 1; v < count; ++v) {
+      for (std::size_t j = 0; j < n; ++j) qre[v][j] = qs[v][j].real(), qim[v][j] = qs[v][j].imag();
+      pre.push_back(qre[v].data());
+      pim.push_back(qim[v].data());
+    }
     std::vector<std::complex<float>> entries, rhs;
     for (std::size_t r0 = 0; r0 < n; r0 += gpu->block_rows()) {
-      const std::size_t count = std::min(gpu->block_rows(), n - r0);
-      gpu->rows(k, alpha.imag(), q, r0, count, entries, rhs);
-      parallel_for(count, o.threads, [&](std::size_t a, std::size_t e) {
+      const std::size_t rows = std::min(gpu->block_rows(), n - r0);
+      gpu->rows(k, alpha.imag(), qs[0], r0, rows, entries, rhs);
+      parallel_for(rows, o.threads, [&](std::size_t a, std::size_t e) {
+        std::vector<cd> more(count);
         for (std::size_t r = a; r < e; ++r) {
-          cd* row = A.data() + (r0 + r) * n;
+          const std::size_t i = r0 + r;
+          cd* row = A.data() + i * n;
           for (std::size_t j = 0; j < n; ++j) row[j] = cd(entries[r * n + j]);
-          b[r0 + r] = finish_row(m, cache, k, alpha, q, o, r0 + r, cd(rhs[r]), row);
+          bs[0][i] = cd(rhs[r]);
+          if (count > 1)
+            far_rhs(cache.far, m.centroid[i], m.normal[i], k, alpha.imag(), pre, pim, i,
+                    more.data());
+          for (std::size_t v = 1; v < count; ++v) bs[v][i] = more[v - 1];
+          finish_row(m, cache, k, alpha, qs, o, i, bs, row);
         }
       });
     }
@@ -130,12 +148,13 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, BemGpuRows* g
               tre.data(), tim.data());
       rre[i] = rim[i] = tre[i] = tim[i] = 0;  // the self term is the closed form
       cd* row = A.data() + i * n;
-      cd far_rhs = 0;
-      for (std::size_t j = 0; j < n; ++j) {
-        row[j] = cd(rre[j], rim[j]);
-        far_rhs += cd(tre[j], tim[j]) * q[j];
+      for (std::size_t j = 0; j < n; ++j) row[j] = cd(rre[j], rim[j]);
+      for (std::size_t v = 0; v < count; ++v) {
+        cd far_rhs = 0;
+        for (std::size_t j = 0; j < n; ++j) far_rhs += cd(tre[j], tim[j]) * qs[v][j];
+        bs[v][i] = far_rhs;
       }
-      b[i] = finish_row(m, cache, k, alpha, q, o, i, far_rhs, row);
+      finish_row(m, cache, k, alpha, qs, o, i, bs, row);
     }
   });
 }
@@ -268,85 +287,104 @@ BemSolver::BemSolver(const BemMesh& mesh, const BemOptions& options)
 BemSolver::~BemSolver() = default;
 
 BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
+  const std::vector<cd> one(q.begin(), q.end());
+  return std::move(solve(k, std::span<const std::vector<cd>>(&one, 1)).front());
+}
+
+std::vector<BemSolver::Result> BemSolver::solve(double k, std::span<const std::vector<cd>> qs) {
   const std::size_t n = mesh_.elements();
   if (!(k > 0) || !std::isfinite(k)) throw InputError("bem: wavenumber must be finite and > 0");
-  if (q.size() != n) throw InternalError("bem: one normal derivative per element expected");
+  if (qs.empty()) return {};
+  for (const auto& q : qs)
+    if (q.size() != n) throw InternalError("bem: one normal derivative per element expected");
   auto t0 = std::chrono::steady_clock::now();
   if (!near_) near_ = std::make_unique<NearCache>(mesh_, options_);
   times_.assembly += seconds_since(t0);
-  Result res = n > options_.hmatrix_limit ? solve_hierarchical(k, q) : solve_dense(k, q);
-  for (const cd& z : res.pressure) {
-    if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
-      throw InternalError("bem: the solve produced non-finite pressures");
-  }
-  return res;
+  std::vector<Result> out =
+      n > options_.hmatrix_limit ? solve_hierarchical(k, qs) : solve_dense(k, qs);
+  for (const Result& res : out)
+    for (const cd& z : res.pressure)
+      if (!std::isfinite(z.real()) || !std::isfinite(z.imag()))
+        throw InternalError("bem: the solve produced non-finite pressures");
+  return out;
 }
 
-BemSolver::Result BemSolver::solve_dense(double k, std::span<const cd> q) {
+std::vector<BemSolver::Result> BemSolver::solve_dense(double k,
+                                                      std::span<const std::vector<cd>> qs) {
   const std::size_t n = mesh_.elements();
   auto t0 = std::chrono::steady_clock::now();
-  std::vector<cd>&A = matrix_, b;
+  std::vector<cd>& A = matrix_;
+  std::vector<std::vector<cd>> bs;
   if (options_.gpu && !gpu_rows_) gpu_rows_ = std::make_unique<BemGpuRows>(options_.gpu, mesh_);
-  assemble(mesh_, *near_, gpu_rows_.get(), k, q, options_, A, b);
+  assemble(mesh_, *near_, gpu_rows_.get(), k, qs, options_, A, bs);
   times_.assembly += seconds_since(t0);
 
-  Result res;
-  if (zero_right_hand_side(b, res)) return res;
-  auto factorize = [&](bool single) {
-    const auto tf = std::chrono::steady_clock::now();
-    if (!lu_) lu_ = std::make_unique<Lu>();
-    if (!lu_->factor(A, n, single)) {
-      lu_.reset();
-      throw InternalError("bem: the Burton-Miller matrix is singular (degenerate surface?)");
+  std::vector<Result> out(qs.size());
+  const MatVec apply = [&](const cd* in, cd* y) { matvec(A, n, in, y); };
+  for (std::size_t v = 0; v < qs.size(); ++v) {
+    Result& res = out[v];
+    const std::vector<cd>& b = bs[v];
+    if (zero_right_hand_side(b, res)) continue;
+    auto factorize = [&](bool single) {
+      const auto tf = std::chrono::steady_clock::now();
+      if (!lu_) lu_ = std::make_unique<Lu>();
+      if (!lu_->factor(A, n, single)) {
+        lu_.reset();
+        throw InternalError("bem: the Burton-Miller matrix is singular (degenerate surface?)");
+      }
+      lu_->k = k;
+      times_.factorization += seconds_since(tf);
+      res.factorized = true;
+    };
+    std::vector<cd> x(n, cd(0.0));
+    if (n <= options_.direct_limit) {
+      // Direct: double-precision factors, computed once per frequency.
+      if (!lu_ || lu_->single || lu_->k != k) factorize(false);
+      x.resize(n + kPad);
+      std::copy(b.begin(), b.end(), x.begin());
+      lu_->solve(x.data());
+      x.resize(n);
+      res.residual = relative_residual(apply, b, x);
+    } else {
+      times_.iteration += gmres_with_nearby_factors(
+          k, extent_, options_, [&] { return lu_ ? lu_->k : NAN; }, [&] { factorize(true); }, apply,
+          [&](cd* y) { lu_->solve(y); }, b, kPad, res, x);
     }
-    lu_->k = k;
-    times_.factorization += seconds_since(tf);
-    res.factorized = true;
-  };
-  const MatVec apply = [&](const cd* in, cd* out) { matvec(A, n, in, out); };
-  std::vector<cd> x(n, cd(0.0));
-  if (n <= options_.direct_limit) {
-    factorize(false);
-    x.resize(n + kPad);
-    std::copy(b.begin(), b.end(), x.begin());
-    lu_->solve(x.data());
-    x.resize(n);
-    res.residual = relative_residual(apply, b, x);
-  } else {
-    times_.iteration += gmres_with_nearby_factors(
-        k, extent_, options_, [&] { return lu_ ? lu_->k : NAN; }, [&] { factorize(true); }, apply,
-        [&](cd* v) { lu_->solve(v); }, b, kPad, res, x);
+    check_converged(res, options_);
+    res.pressure.assign(x.begin(), x.begin() + long(n));
   }
-  check_converged(res, options_);
-  res.pressure.assign(x.begin(), x.begin() + long(n));
-  return res;
+  return out;
 }
 
 // As solve_dense's GMRES branch, with the matrix compressed and the preconditioner its
 // hierarchical LU; the residual is that of the compressed matrix.
-BemSolver::Result BemSolver::solve_hierarchical(double k, std::span<const cd> q) {
+std::vector<BemSolver::Result> BemSolver::solve_hierarchical(double k,
+                                                             std::span<const std::vector<cd>> qs) {
   const std::size_t n = mesh_.elements();
   auto t0 = std::chrono::steady_clock::now();
   if (!hmatrix_) hmatrix_ = std::make_unique<HMatrixSystem>(mesh_, *near_, options_);
-  std::vector<cd> b;
-  hmatrix_->assemble(k, q, b);
+  std::vector<std::vector<cd>> bs;
+  hmatrix_->assemble(k, qs, bs);
   times_.assembly += seconds_since(t0);
-  Result res;
-  if (zero_right_hand_side(b, res)) return res;
-  auto factorize = [&] {
-    const auto tf = std::chrono::steady_clock::now();
-    hmatrix_->factorize();
-    times_.factorization += seconds_since(tf);
-    res.factorized = true;
-  };
-  std::vector<cd> x(n, cd(0.0));
-  times_.iteration += gmres_with_nearby_factors(
-      k, extent_, options_, [&] { return hmatrix_->factorized() ? hmatrix_->factor_k() : NAN; },
-      factorize, [&](const cd* in, cd* out) { hmatrix_->apply(in, out); },
-      [&](cd* v) { hmatrix_->precondition(v); }, b, 0, res, x);
-  check_converged(res, options_);
-  res.pressure = std::move(x);
-  return res;
+  std::vector<Result> out(qs.size());
+  for (std::size_t v = 0; v < qs.size(); ++v) {
+    Result& res = out[v];
+    if (zero_right_hand_side(bs[v], res)) continue;
+    auto factorize = [&] {
+      const auto tf = std::chrono::steady_clock::now();
+      hmatrix_->factorize();
+      times_.factorization += seconds_since(tf);
+      res.factorized = true;
+    };
+    std::vector<cd> x(n, cd(0.0));
+    times_.iteration += gmres_with_nearby_factors(
+        k, extent_, options_, [&] { return hmatrix_->factorized() ? hmatrix_->factor_k() : NAN; },
+        factorize, [&](const cd* in, cd* y) { hmatrix_->apply(in, y); },
+        [&](cd* y) { hmatrix_->precondition(y); }, bs[v], 0, res, x);
+    check_converged(res, options_);
+    res.pressure = std::move(x);
+  }
+  return out;
 }
 
 }  // namespace chladni::precompute

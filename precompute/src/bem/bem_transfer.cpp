@@ -56,14 +56,12 @@ AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k
   return bem_level(surface, k, o) >= 0 ? M::Bem : M::Sources;
 }
 
-ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& elements,
-                          const BemMesh& mesh, BemSolver& solver, double k,
-                          const NormalVelocity& un, const AcousticOptions& o, std::vector<cd>& a,
-                          TransferTimes* times, std::vector<cd>* pressure, std::vector<cd>* dpdn) {
-  const std::size_t n = mesh.elements();
-  if (n != elements.parent.size())
-    throw InternalError("bem: the boundary mesh is not the surface's elements");
-  // dp/dn = i omega rho0 u_n, averaged over each element (3 points, mapped into the parent).
+namespace {
+
+// dp/dn = i omega rho0 u_n, averaged over each element (3 points, mapped into the parent).
+std::vector<cd> element_dpdn(const BemSurface& elements, double k, const NormalVelocity& un,
+                             const AcousticOptions& o) {
+  const std::size_t n = elements.parent.size();
   const cd neumann(0.0, k * o.sound_speed * o.air_density);
   constexpr double kPoints[3][3] = {
       {2.0 / 3, 1.0 / 6, 1.0 / 6}, {1.0 / 6, 2.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 6, 2.0 / 3}};
@@ -78,15 +76,15 @@ ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& ele
     }
     q[j] = neumann * sum / 3.0;
   }
-  const BemSolver::Times before = solver.times();
-  const BemSolver::Result res = solver.solve(k, q);
-  if (times) {
-    const BemSolver::Times& after = solver.times();
-    times->matrix += after.assembly - before.assembly;
-    times->solve += after.factorization - before.factorization + after.iteration - before.iteration;
-  }
+  return q;
+}
 
-  const auto t0 = std::chrono::steady_clock::now();
+// From one solve's surface pressure: c_lm by quadrature, trimmed and checked, and the interior
+// null-field check.
+ModeTransfer expand_solution(const RadiatingSurface& surface, const BemMesh& mesh, double k,
+                             const BemSolver::Result& res, const std::vector<cd>& q,
+                             const AcousticOptions& o, std::vector<cd>& a) {
+  const std::size_t n = mesh.elements();
   const double R = surface.radius();
   const int L = expansion_order(k, R, o);
   a = bem_multipoles(mesh, k, surface.centre(), L, res.pressure, q, o.bem.threads);
@@ -116,10 +114,45 @@ ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& ele
     if (clear && inside.size() < 16) inside.push_back(x);
   }
   mt.held_out_error = static_cast<float>(null_field_error(mesh, k, res.pressure, q, inside, o.bem));
-  if (times) times->expand += seconds_since(t0);
-  if (pressure) *pressure = res.pressure;
-  if (dpdn) *dpdn = std::move(q);
   return mt;
+}
+
+}  // namespace
+
+std::vector<ModeTransfer> bem_transfer(const RadiatingSurface& surface, const BemSurface& elements,
+                                       const BemMesh& mesh, BemSolver& solver, double k,
+                                       std::span<const NormalVelocity> un, const AcousticOptions& o,
+                                       std::vector<std::vector<cd>*> a, TransferTimes* times,
+                                       std::vector<cd>* pressure, std::vector<cd>* dpdn) {
+  if (mesh.elements() != elements.parent.size())
+    throw InternalError("bem: the boundary mesh is not the surface's elements");
+  if (a.size() != un.size()) throw InternalError("bem: one coefficient vector per mode expected");
+  std::vector<std::vector<cd>> qs;
+  for (const NormalVelocity& u : un) qs.push_back(element_dpdn(elements, k, u, o));
+  const BemSolver::Times before = solver.times();
+  const std::vector<BemSolver::Result> res = solver.solve(k, qs);
+  if (times) {
+    const BemSolver::Times& after = solver.times();
+    times->matrix += after.assembly - before.assembly;
+    times->solve += after.factorization - before.factorization + after.iteration - before.iteration;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<ModeTransfer> out;
+  for (std::size_t v = 0; v < un.size(); ++v)
+    out.push_back(expand_solution(surface, mesh, k, res[v], qs[v], o, *a[v]));
+  if (times) times->expand += seconds_since(t0);
+  if (pressure && !res.empty()) *pressure = res.front().pressure;
+  if (dpdn && !qs.empty()) *dpdn = std::move(qs.front());
+  return out;
+}
+
+ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& elements,
+                          const BemMesh& mesh, BemSolver& solver, double k,
+                          const NormalVelocity& un, const AcousticOptions& o, std::vector<cd>& a,
+                          TransferTimes* times, std::vector<cd>* pressure, std::vector<cd>* dpdn) {
+  return bem_transfer(surface, elements, mesh, solver, k, std::span<const NormalVelocity>(&un, 1),
+                      o, {&a}, times, pressure, dpdn)
+      .front();
 }
 
 void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
@@ -133,10 +166,19 @@ void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank
   std::unique_ptr<BemSurface> elements;
   std::unique_ptr<BemMesh> mesh;
   std::unique_ptr<BemSolver> solver;
-  for (std::size_t i : which) {
-    const double omega = bank.damped_omega(i);  // radiates at the damped frequency
-    const double k = omega / o.sound_speed;
-    const int level = std::max(0, bem_level(surface, k, o));
+  auto wavenumber = [&](std::size_t i) { return bank.damped_omega(i) / o.sound_speed; };
+  for (std::size_t g0 = 0; g0 < which.size();) {
+    // Modes within bem_shared_frequency of the group's first (degenerate pairs and clusters of
+    // a symmetric body) share one assembly and factorization at their mean wavenumber.
+    const double k0 = wavenumber(which[g0]);
+    const int level = std::max(0, bem_level(surface, k0, o));
+    std::size_t g1 = g0 + 1;
+    double ksum = k0;
+    while (g1 < which.size() &&
+           std::abs(wavenumber(which[g1]) / k0 - 1) <= o.bem_shared_frequency &&
+           std::max(0, bem_level(surface, wavenumber(which[g1]), o)) == level)
+      ksum += wavenumber(which[g1++]);
+    const double k = ksum / double(g1 - g0);
     if (!elements || elements->level != level) {
       solver.reset();
       mesh.reset();
@@ -144,9 +186,21 @@ void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank
       mesh = std::make_unique<BemMesh>(elements->mesh);
       solver = std::make_unique<BemSolver>(*mesh, o.bem);
     }
-    const NormalVelocity un = surface.from_mode_shape(bank.shapes.data() + i * nv * 3, omega);
-    modes[i] = bem_transfer(surface, *elements, *mesh, *solver, k, un, o, coeffs[i], times);
-    if (done) done();
+    std::vector<NormalVelocity> un;
+    std::vector<std::vector<cd>*> a;
+    for (std::size_t g = g0; g < g1; ++g) {
+      const std::size_t i = which[g];
+      un.push_back(
+          surface.from_mode_shape(bank.shapes.data() + i * nv * 3, wavenumber(i) * o.sound_speed));
+      a.push_back(&coeffs[i]);
+    }
+    const std::vector<ModeTransfer> mt =
+        bem_transfer(surface, *elements, *mesh, *solver, k, un, o, a, times);
+    for (std::size_t g = g0; g < g1; ++g) {
+      modes[which[g]] = mt[g - g0];
+      if (done) done();
+    }
+    g0 = g1;
   }
 }
 

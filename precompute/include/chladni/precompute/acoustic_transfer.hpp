@@ -33,6 +33,10 @@ struct AcousticOptions {
   /// at 26,000 elements on 2 cores).
   std::size_t bem_max_elements = 32768;
   double bem_elements_per_wavelength = 6.0;
+  /// Modes whose wavenumbers differ by at most this (relative) share one BEM assembly and solve
+  /// at their mean wavenumber: the degenerate pairs of symmetric bodies, whose frequencies the
+  /// mesh splits by ~1e-5. The change of the radiated field is of the same relative order.
+  double bem_shared_frequency = 1e-4;
   BemOptions bem;
   double sound_speed = 343.0;  ///< m/s
   double air_density = 1.204;  ///< kg/m^3 (air at 20 C)
@@ -168,6 +172,17 @@ ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& ele
                           std::vector<std::complex<double>>& a, TransferTimes* times = nullptr,
                           std::vector<std::complex<double>>* pressure = nullptr,
                           std::vector<std::complex<double>>* dpdn = nullptr);
+
+/// Several modes at one wavenumber k (of nearly equal frequencies): one assembly and at most one
+/// factorization, then each mode's expansion into *a[v]. pressure/dpdn: the first mode's.
+std::vector<ModeTransfer> bem_transfer(const RadiatingSurface& surface, const BemSurface& elements,
+                                       const BemMesh& mesh, BemSolver& solver, double k,
+                                       std::span<const NormalVelocity> un,
+                                       const AcousticOptions& options,
+                                       std::vector<std::vector<std::complex<double>>*> a,
+                                       TransferTimes* times = nullptr,
+                                       std::vector<std::complex<double>>* pressure = nullptr,
+                                       std::vector<std::complex<double>>* dpdn = nullptr);
 
 /// The method compute_transfer uses for a mode of wavenumber k on this surface (Bem or Sources).
 AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,

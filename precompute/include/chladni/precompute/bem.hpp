@@ -117,6 +117,8 @@ class BemSolver {
   };
   /// dpdn: dp/dn per element (Pa/m). Throws InternalError when the solve fails.
   Result solve(double k, std::span<const cd> dpdn);
+  /// Several right-hand sides at one wavenumber: one assembly, at most one factorization.
+  std::vector<Result> solve(double k, std::span<const std::vector<cd>> dpdn);
   const Times& times() const { return times_; }
   const BemMesh& mesh() const { return mesh_; }
 
@@ -124,8 +126,8 @@ class BemSolver {
   struct Lu;         ///< LAPACK LU factors of one frequency's matrix
 
  private:
-  Result solve_dense(double k, std::span<const cd> dpdn);
-  Result solve_hierarchical(double k, std::span<const cd> dpdn);
+  std::vector<Result> solve_dense(double k, std::span<const std::vector<cd>> dpdn);
+  std::vector<Result> solve_hierarchical(double k, std::span<const std::vector<cd>> dpdn);
   const BemMesh& mesh_;
   BemOptions options_;
   std::unique_ptr<Lu> lu_;
