@@ -6,7 +6,8 @@
 // Above BemOptions::hmatrix_limit elements the system is a hierarchical matrix; "LU" is then its
 // hierarchical LU.
 // Usage: chladni_bem_bench [SURFACE ...] [--freq HZ] [--steps N] [--step REL] [--backend cpu|gpu]
-//                          [--refactor-phase RAD] [--hmatrix-limit N] [--json OUT]
+//                          [--refactor-phase RAD] [--hmatrix-limit N] [--lu-epsilon E]
+//                          [--json OUT]
 //        (gpu: the centroid-rule rows on the Vulkan device, kernels/bem_far.comp)
 //        SURFACE: icosphere:L, FILE or FILE@S (default icosphere:3 icosphere:4 meshes/bowl.obj)
 #include <chrono>
@@ -42,7 +43,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> surfaces;
   double freq = 2000;
   int steps = 3;
-  double step = 0.005, refactor_phase = -1;
+  double step = 0.005, refactor_phase = -1, lu_epsilon = -1;
   long hmatrix_limit = -1;
   std::string json_path, backend = "cpu";
   for (int i = 1; i < argc; ++i) {
@@ -54,6 +55,8 @@ int main(int argc, char** argv) {
       hmatrix_limit = std::stol(argv[++i]);
     else if (!std::strcmp(argv[i], "--refactor-phase") && i + 1 < argc)
       refactor_phase = std::stod(argv[++i]);
+    else if (!std::strcmp(argv[i], "--lu-epsilon") && i + 1 < argc)
+      lu_epsilon = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--step") && i + 1 < argc)
       step = std::stod(argv[++i]);
     else if (!std::strcmp(argv[i], "--backend") && i + 1 < argc)
@@ -72,6 +75,7 @@ int main(int argc, char** argv) {
     precompute::BemOptions o;
     if (refactor_phase >= 0) o.refactor_phase = refactor_phase;
     if (hmatrix_limit >= 0) o.hmatrix_limit = std::size_t(hmatrix_limit);
+    if (lu_epsilon > 0) o.hmatrix_lu_epsilon = lu_epsilon;
     if (backend == "gpu") o.gpu = std::make_shared<gpu::Context>();
     precompute::BemSolver solver(mesh, o);
     std::vector<cd> q(mesh.elements());

@@ -19,6 +19,7 @@
 #include "chladni/core/transfer.hpp"
 #include "chladni/gpu/context.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
+#include "chladni/precompute/memory_budget.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "commands.hpp"
 
@@ -114,6 +115,7 @@ void run_radiate(const RadiateArgs& a) {
   o.sound_speed = a.sound_speed;
   o.air_density = a.air_density;
   o.order = a.order;
+  o.bem_max_memory = precompute::default_memory_budget();  // 80 % of the memory available
   const precompute::RadiatingSurface surf(mesh, o);
   // Past a few hundred wavelengths across, no method here resolves the field (BEM elements,
   // sources and multipole orders are all capped): refuse rather than print a wrong field.

@@ -6,7 +6,9 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <string>
 
+#include "chladni/core/error.hpp"
 #include "chladni/core/transfer.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
 #include "chladni/precompute/bem.hpp"
@@ -64,6 +66,22 @@ TEST(BemRefine, FarFieldConvergesAsTheElementsHalve) {
   o.bem_auto_elements = s.triangles.size();  // no room to split: the fit takes over
   EXPECT_EQ(precompute::bem_level(surf, k, o), -1);
   EXPECT_EQ(precompute::resolve_method(surf, k, o), precompute::AcousticOptions::Method::Sources);
+  o = {};
+  // The memory budget caps the split as the element cap does (icosphere:2 has 320 triangles, so
+  // level 1 has 1280 and level 2 5120): auto falls back to sources, a forced BEM takes the finest
+  // mesh that fits and refuses, naming the option, when not even the surface's own fits.
+  EXPECT_LT(precompute::bem_memory(1280, o.bem), precompute::bem_memory(5120, o.bem));
+  o.bem_max_memory = precompute::bem_memory(1280, o.bem);
+  EXPECT_EQ(precompute::bem_level(surf, k, o), -1);
+  o.method = precompute::AcousticOptions::Method::Bem;
+  EXPECT_EQ(precompute::bem_level(surf, k, o), 1);
+  o.bem_max_memory = 0.5 * precompute::bem_memory(320, o.bem);
+  try {
+    precompute::bem_level(surf, k, o);
+    ADD_FAILURE() << "a surface over the memory budget was accepted";
+  } catch (const BudgetError& e) {
+    EXPECT_NE(std::string(e.what()).find("--max-memory"), std::string::npos) << e.what();
+  }
   o = {};
 
   std::vector<cd> un(s.vertices.size());

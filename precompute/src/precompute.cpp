@@ -320,6 +320,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
         o.gpu ? make_gpu_transfer_kernels(o.gpu) : make_cpu_transfer_kernels(1);
     r.transfer_kernels = kernels->name();
     AcousticOptions acoustic = o.acoustic;
+    if (acoustic.bem_max_memory <= 0) acoustic.bem_max_memory = eo.max_memory;
     if (!acoustic.bem.gpu) acoustic.bem.gpu = o.gpu;  // BEM rows on the same device
     bank.transfer = compute_transfer(rs, bank, acoustic, *kernels, &r.transfer_times,
                                      [&](std::size_t done, std::size_t total) {

@@ -284,7 +284,24 @@ BemSolver::BemSolver(const BemMesh& mesh, const BemOptions& options)
   extent_ = norm(sub(hi, lo));
 }
 
+BemSolver::BemSolver(const BemMesh& mesh, const BemOptions& options,
+                     std::shared_ptr<const NearCache> near)
+    : BemSolver(mesh, options) {
+  if (near && near->rows.size() != mesh.elements())
+    throw InternalError("bem: a shared near field of another mesh");
+  near_ = std::move(near);
+}
+
 BemSolver::~BemSolver() = default;
+
+std::shared_ptr<const BemSolver::NearCache> BemSolver::near_field() {
+  if (!near_) {
+    const auto t0 = std::chrono::steady_clock::now();
+    near_ = std::make_shared<const NearCache>(mesh_, options_);
+    times_.assembly += seconds_since(t0);
+  }
+  return near_;
+}
 
 BemSolver::Result BemSolver::solve(double k, std::span<const cd> q) {
   const std::vector<cd> one(q.begin(), q.end());
@@ -297,9 +314,7 @@ std::vector<BemSolver::Result> BemSolver::solve(double k, std::span<const std::v
   if (qs.empty()) return {};
   for (const auto& q : qs)
     if (q.size() != n) throw InternalError("bem: one normal derivative per element expected");
-  auto t0 = std::chrono::steady_clock::now();
-  if (!near_) near_ = std::make_unique<NearCache>(mesh_, options_);
-  times_.assembly += seconds_since(t0);
+  near_field();
   std::vector<Result> out =
       n > options_.hmatrix_limit ? solve_hierarchical(k, qs) : solve_dense(k, qs);
   for (const Result& res : out)

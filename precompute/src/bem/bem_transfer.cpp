@@ -4,10 +4,15 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <numbers>
+#include <string>
+#include <thread>
 
+#include "../blas_threads.hpp"
 #include "../timing.hpp"
+#include "bem_hmatrix.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
@@ -16,6 +21,12 @@ namespace chladni::precompute {
 namespace {
 
 using cd = std::complex<double>;
+
+std::string gigabytes(double bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f GB", bytes / 1e9);
+  return text;
+}
 
 // The representation p(x) = int p dG/dn_y - q G vanishes inside the body: its size there,
 // against the size of either term, measures how consistent the surface pressure is with the data.
@@ -36,17 +47,39 @@ double null_field_error(const BemMesh& mesh, double k, const std::vector<cd>& p,
 
 }  // namespace
 
+double bem_memory(std::size_t n, const BemOptions& o) {
+  const double N = double(n);
+  // Measured peak resident memory of the hierarchical solve: 226-236 kB per element on the bell
+  // (10,880 elements, 3 kHz) and the split bowl (26,112, 13 kHz), 165 kB on the split bar.
+  if (n > o.hmatrix_limit) return 256e3 * N;
+  // Dense: the matrix, its LU (single precision above the direct limit) and the near cache.
+  return (n > o.direct_limit ? 24.0 : 32.0) * N * N + 8e3 * N;
+}
+
 int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& o) {
   const double target = 2 * std::numbers::pi / o.bem_elements_per_wavelength;
   double n = double(surface.mesh().triangles.size()), h = surface.mean_element_size();
   const bool forced = o.method == AcousticOptions::Method::Bem;
   const double cap = double(forced ? o.bem_max_elements : o.bem_auto_elements);
-  int fits = -1;
-  for (int level = 0; level <= 4 && n <= cap; ++level, n *= 4, h /= 2) {
-    fits = level;
+  auto fits = [&](double elements) {
+    return elements <= cap &&
+           (o.bem_max_memory <= 0 || bem_memory(std::size_t(elements), o.bem) <= o.bem_max_memory);
+  };
+  int best = -1;
+  for (int level = 0; level <= 4 && fits(n); ++level, n *= 4, h /= 2) {
+    best = level;
     if (h * k <= target) return level;
   }
-  return forced ? std::max(fits, 0) : -1;
+  if (!forced) return -1;
+  if (best < 0) {
+    const double need = bem_memory(surface.mesh().triangles.size(), o.bem);
+    throw BudgetError("transfer: boundary elements on the " +
+                      std::to_string(surface.mesh().triangles.size()) + " surface triangles need " +
+                      gigabytes(need) + ", more than --max-memory allows (" +
+                      gigabytes(o.bem_max_memory) +
+                      "): raise --max-memory or use --transfer-method auto or sources");
+  }
+  return best;
 }
 
 AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,
@@ -155,52 +188,129 @@ ModeTransfer bem_transfer(const RadiatingSurface& surface, const BemSurface& ele
       .front();
 }
 
+namespace {
+
+// Modes solved together: one wavenumber, one element mesh.
+struct ModeGroup {
+  int level = 0;
+  double k = 0;
+  std::vector<std::size_t> modes;
+};
+
+// Consecutive modes (ascending frequency) within bem_shared_frequency of a group's first (the
+// degenerate pairs and clusters of a symmetric body) form a group, solved at their mean k.
+std::vector<ModeGroup> group_modes(const RadiatingSurface& surface, const Soundbank& bank,
+                                   const std::vector<std::size_t>& which,
+                                   const AcousticOptions& o) {
+  auto wavenumber = [&](std::size_t i) { return bank.damped_omega(i) / o.sound_speed; };
+  std::vector<ModeGroup> groups;
+  for (std::size_t i : which) {
+    const double k = wavenumber(i);
+    const int level = std::max(0, bem_level(surface, k, o));
+    ModeGroup* g = groups.empty() ? nullptr : &groups.back();
+    if (g && g->level == level &&
+        std::abs(k / wavenumber(g->modes.front()) - 1) <= o.bem_shared_frequency) {
+      g->modes.push_back(i);
+    } else {
+      groups.push_back({level, 0.0, {i}});
+    }
+  }
+  for (ModeGroup& g : groups) {
+    for (std::size_t i : g.modes) g.k += wavenumber(i);
+    g.k /= double(g.modes.size());
+  }
+  return groups;
+}
+
+// Solves groups in order on one solver (each LU preconditions the next frequencies).
+void solve_groups(const RadiatingSurface& surface, const Soundbank& bank,
+                  const BemSurface& elements, const BemMesh& mesh, BemSolver& solver,
+                  std::span<const ModeGroup> groups, const AcousticOptions& o,
+                  std::vector<ModeTransfer>& modes, std::vector<std::vector<cd>>& coeffs,
+                  TransferTimes* times, const std::function<void()>& done) {
+  const std::size_t nv = bank.vertices.size();
+  for (const ModeGroup& g : groups) {
+    std::vector<NormalVelocity> un;
+    std::vector<std::vector<cd>*> a;
+    for (std::size_t i : g.modes) {
+      un.push_back(surface.from_mode_shape(bank.shapes.data() + i * nv * 3, bank.damped_omega(i)));
+      a.push_back(&coeffs[i]);
+    }
+    const std::vector<ModeTransfer> mt =
+        bem_transfer(surface, elements, mesh, solver, g.k, un, o, a, times);
+    for (std::size_t v = 0; v < g.modes.size(); ++v) {
+      // The series from R outwards at the mode's own wavenumber, so the phase far away is its.
+      modes[g.modes[v]] = mt[v];
+      modes[g.modes[v]].wavenumber = bank.damped_omega(g.modes[v]) / o.sound_speed;
+      if (done) done();
+    }
+  }
+}
+
+// Two solvers at once where one solve keeps one core (hmat-oss is sequential) and the memory
+// holds two systems; else one.
+int solver_workers(std::size_t elements, std::size_t groups, const AcousticOptions& o) {
+  const unsigned cores =
+      o.bem.threads > 0 ? unsigned(o.bem.threads) : std::thread::hardware_concurrency();
+  if (elements <= o.bem.hmatrix_limit || cores < 2 || groups < 2) return 1;
+  if (o.bem_max_memory > 0 && 2 * bem_memory(elements, o.bem) > o.bem_max_memory) return 1;
+  return 2;
+}
+
+}  // namespace
+
 void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
                           const std::vector<std::size_t>& which, const AcousticOptions& o,
                           std::vector<ModeTransfer>& modes, std::vector<std::vector<cd>>& coeffs,
                           TransferTimes* times, const std::function<void()>& done) {
-  if (which.empty()) return;
-  const std::size_t nv = bank.vertices.size();
-  // One element mesh (and solver, whose LU nearby frequencies share) per refinement level, built
-  // as the ascending frequencies first need it.
-  std::unique_ptr<BemSurface> elements;
-  std::unique_ptr<BemMesh> mesh;
-  std::unique_ptr<BemSolver> solver;
-  auto wavenumber = [&](std::size_t i) { return bank.damped_omega(i) / o.sound_speed; };
-  for (std::size_t g0 = 0; g0 < which.size();) {
-    // Modes within bem_shared_frequency of the group's first (degenerate pairs and clusters of
-    // a symmetric body) share one assembly and factorization at their mean wavenumber.
-    const double k0 = wavenumber(which[g0]);
-    const int level = std::max(0, bem_level(surface, k0, o));
-    std::size_t g1 = g0 + 1;
-    double ksum = k0;
-    while (g1 < which.size() &&
-           std::abs(wavenumber(which[g1]) / k0 - 1) <= o.bem_shared_frequency &&
-           std::max(0, bem_level(surface, wavenumber(which[g1]), o)) == level)
-      ksum += wavenumber(which[g1++]);
-    const double k = ksum / double(g1 - g0);
-    if (!elements || elements->level != level) {
-      solver.reset();
-      mesh.reset();
-      elements = std::make_unique<BemSurface>(surface.mesh(), level);
-      mesh = std::make_unique<BemMesh>(elements->mesh);
-      solver = std::make_unique<BemSolver>(*mesh, o.bem);
+  const std::vector<ModeGroup> groups = group_modes(surface, bank, which, o);
+  for (std::size_t l0 = 0; l0 < groups.size();) {  // one element mesh per run of a level
+    std::size_t l1 = l0;
+    while (l1 < groups.size() && groups[l1].level == groups[l0].level) ++l1;
+    const BemSurface elements(surface.mesh(), groups[l0].level);
+    const BemMesh mesh(elements.mesh);
+    const std::span<const ModeGroup> run(groups.data() + l0, l1 - l0);
+    if (solver_workers(mesh.elements(), run.size(), o) == 1) {
+      BemSolver solver(mesh, o.bem);
+      solve_groups(surface, bank, elements, mesh, solver, run, o, modes, coeffs, times, done);
+    } else {
+      // The lower and the upper half of the band side by side, one core each, sharing the
+      // near field (computed here on every core).
+      std::shared_ptr<const BemSolver::NearCache> near = BemSolver(mesh, o.bem).near_field();
+      AcousticOptions one = o;
+      one.bem.threads = 1;
+      const SingleThreadedBlas blas;
+      const std::size_t half = (run.size() + 1) / 2;
+      TransferTimes upper_times;
+      std::exception_ptr upper_error;
+      std::thread upper([&] {
+        try {
+          bem_detail::set_hmat_worker(1);
+          BemSolver solver(mesh, one.bem, near);
+          solve_groups(surface, bank, elements, mesh, solver, run.subspan(half), one, modes, coeffs,
+                       &upper_times, done);
+        } catch (...) {
+          upper_error = std::current_exception();
+        }
+      });
+      std::exception_ptr lower_error;
+      try {
+        bem_detail::set_hmat_worker(0);
+        BemSolver solver(mesh, one.bem, near);
+        solve_groups(surface, bank, elements, mesh, solver, run.first(half), one, modes, coeffs,
+                     times, done);
+      } catch (...) {
+        lower_error = std::current_exception();
+      }
+      upper.join();
+      bem_detail::set_hmat_worker(-1);
+      if (lower_error) std::rethrow_exception(lower_error);
+      if (upper_error) std::rethrow_exception(upper_error);
+      if (times)
+        times->matrix += upper_times.matrix, times->solve += upper_times.solve,
+            times->expand += upper_times.expand;
     }
-    std::vector<NormalVelocity> un;
-    std::vector<std::vector<cd>*> a;
-    for (std::size_t g = g0; g < g1; ++g) {
-      const std::size_t i = which[g];
-      un.push_back(
-          surface.from_mode_shape(bank.shapes.data() + i * nv * 3, wavenumber(i) * o.sound_speed));
-      a.push_back(&coeffs[i]);
-    }
-    const std::vector<ModeTransfer> mt =
-        bem_transfer(surface, *elements, *mesh, *solver, k, un, o, a, times);
-    for (std::size_t g = g0; g < g1; ++g) {
-      modes[which[g]] = mt[g - g0];
-      if (done) done();
-    }
-    g0 = g1;
+    l0 = l1;
   }
 }
 

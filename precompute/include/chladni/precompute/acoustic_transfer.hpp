@@ -33,6 +33,9 @@ struct AcousticOptions {
   /// at 26,000 elements on 2 cores).
   std::size_t bem_max_elements = 32768;
   double bem_elements_per_wavelength = 6.0;
+  /// Bytes the BEM system may take (bem_memory; 0: no limit). Element meshes over it are not
+  /// used: auto gives the mode sources, bem the finest mesh that fits (BudgetError if none does).
+  double bem_max_memory = 0;
   /// Modes whose wavenumbers differ by at most this (relative) share one BEM assembly and solve
   /// at their mean wavenumber: the degenerate pairs of symmetric bodies, whose frequencies the
   /// mesh splits by ~1e-5. The change of the radiated field is of the same relative order.
@@ -188,9 +191,14 @@ std::vector<ModeTransfer> bem_transfer(const RadiatingSurface& surface, const Be
 AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,
                                        const AcousticOptions& options);
 
+/// Estimated peak bytes of a BEM solve on n elements: the dense matrix and its LU up to
+/// BemOptions::hmatrix_limit, the measured per-element cost of the hierarchical one above.
+double bem_memory(std::size_t n, const BemOptions& options);
+
 /// How many times BEM splits the surface's triangles for wavenumber k: the fewest that give
-/// bem_elements_per_wavelength within bem_auto_elements elements; -1 when none does (with
-/// method Bem forced: the most that fit, at least 0).
+/// bem_elements_per_wavelength within bem_auto_elements elements and bem_max_memory; -1 when
+/// none does (with method Bem forced: the most that fit; BudgetError when not even the
+/// surface's own triangles fit the memory).
 int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& options);
 
 /// compute_transfer's BEM path for the listed modes (ascending frequency, so each GMRES solve is

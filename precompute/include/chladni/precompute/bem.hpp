@@ -60,7 +60,7 @@ struct BemOptions {
   /// compressed to hmatrix_epsilon, GMRES preconditioned by its LU at hmatrix_lu_epsilon.
   std::size_t hmatrix_limit = 8000;
   double hmatrix_epsilon = 1e-4;
-  double hmatrix_lu_epsilon = 1e-2;
+  double hmatrix_lu_epsilon = 0.1;
   int threads = 0;  ///< 0: all cores
   /// Vulkan device for the centroid-rule rows (kernels/bem_far.comp, float); null: the CPU loop.
   std::shared_ptr<gpu::Context> gpu;
@@ -125,13 +125,18 @@ class BemSolver {
   struct NearCache;  ///< frequency-independent static near-field integrals
   struct Lu;         ///< LAPACK LU factors of one frequency's matrix
 
+  /// The near-field integrals (computed on first use, on options.threads): solvers of the same
+  /// mesh share them through the constructor below.
+  std::shared_ptr<const NearCache> near_field();
+  BemSolver(const BemMesh& mesh, const BemOptions& options, std::shared_ptr<const NearCache> near);
+
  private:
   std::vector<Result> solve_dense(double k, std::span<const std::vector<cd>> dpdn);
   std::vector<Result> solve_hierarchical(double k, std::span<const std::vector<cd>> dpdn);
   const BemMesh& mesh_;
   BemOptions options_;
   std::unique_ptr<Lu> lu_;
-  std::unique_ptr<NearCache> near_;
+  std::shared_ptr<const NearCache> near_;
   std::unique_ptr<BemGpuRows> gpu_rows_;
   std::unique_ptr<bem_detail::HMatrixSystem> hmatrix_;
   std::vector<cd> matrix_;  // the current frequency's system, kept to reuse its memory

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "chladni/precompute/fem.hpp"
+#include "chladni/precompute/memory_budget.hpp"
 
 namespace chladni::precompute {
 
@@ -25,10 +26,6 @@ struct EigenOptions {
   /// solve_modes refuses (InputError) with the numbers.
   double max_memory = 0;
 };
-
-/// The default memory budget: 80 % of the memory available now (Linux /proc/meminfo), else of
-/// the physical memory.
-double default_memory_budget();
 
 struct EigenResult {
   std::vector<double> lambda;    ///< omega^2 of the elastic modes, ascending
