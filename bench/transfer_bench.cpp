@@ -2,7 +2,9 @@
 // of a soundbank per stage on the CPU (double) and GPU (float) kernels. Listener gains:
 // gains_bench.cpp.
 // Usage: chladni_transfer_bench BANK [--modes N] [--solver normal|qr]
+//        [--method sources|bem|auto] [--hmatrix-limit N] [--bem-solvers 0|1|2]
 //        [--backends cpu,gpu] [--json OUT]
+// (--method bem or auto: the modes given BEM are solved once per backend, with progress.)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -12,9 +14,12 @@
 #include <string>
 #include <thread>
 
+#include <sys/resource.h>
+
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
+#include "chladni/precompute/memory_budget.hpp"
 
 using namespace chladni;
 using clock_type = std::chrono::steady_clock;
@@ -30,7 +35,8 @@ int main(int argc, char** argv) {
   }
   std::string bank_path = argv[1], json_path;
   std::size_t modes = 100;
-  std::string solver = "normal", runs = "cpu,gpu";
+  long hmatrix_limit = -1, solvers = 0;
+  std::string solver = "normal", runs = "cpu,gpu", method = "sources";
   for (int i = 2; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--modes"))
       modes = std::stoul(argv[i + 1]);
@@ -38,6 +44,12 @@ int main(int argc, char** argv) {
       json_path = argv[i + 1];
     else if (!std::strcmp(argv[i], "--solver"))
       solver = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--hmatrix-limit"))
+      hmatrix_limit = std::stol(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--bem-solvers"))
+      solvers = std::stol(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--method"))
+      method = argv[i + 1];
     else if (!std::strcmp(argv[i], "--backends"))
       runs = argv[i + 1];
   }
@@ -59,6 +71,16 @@ int main(int argc, char** argv) {
     o.solver = solver == "normal" ? precompute::AcousticOptions::Solver::Normal
                                   : precompute::AcousticOptions::Solver::Qr;
     j["solver"] = solver;
+    using M = precompute::AcousticOptions::Method;
+    if (method != "sources" && method != "bem" && method != "auto") {
+      std::fprintf(stderr, "--method must be sources, bem or auto\n");
+      return 2;
+    }
+    o.method = method == "bem" ? M::Bem : method == "auto" ? M::Auto : M::Sources;
+    o.bem_max_memory = precompute::default_memory_budget();
+    if (hmatrix_limit >= 0) o.bem.hmatrix_limit = std::size_t(hmatrix_limit);
+    o.bem_solvers = int(solvers);
+    j["method"] = method;
     auto t0 = clock_type::now();
     const precompute::RadiatingSurface surf({bank.vertices, bank.triangles}, o);
     j["prepare_s"] = since(t0);
@@ -83,18 +105,27 @@ int main(int argc, char** argv) {
          {Run{"cpu", false, 0}, Run{"cpu", false, 1}, Run{"gpu", true, 0}, Run{"gpu", true, 1}}) {
       if (run.gpu && !ctx) continue;
       if (runs.find(run.name) == std::string::npos) continue;
+      if (method == "bem" && run.mode_threads == 1) continue;  // the BEM path has its own threads
       auto kernels = run.gpu ? precompute::make_gpu_transfer_kernels(ctx)
                              : precompute::make_cpu_transfer_kernels(run.mode_threads == 1 ? 0 : 1);
       precompute::AcousticOptions ro = o;
       ro.threads = run.mode_threads;
       precompute::TransferTimes times;
       t0 = clock_type::now();
-      Transfer t = precompute::compute_transfer(surf, bank, ro, *kernels, &times);
+      Transfer t = precompute::compute_transfer(
+          surf, bank, ro, *kernels, &times, [&](std::size_t done, std::size_t total) {
+            if (method != "sources")
+              std::fprintf(stderr, "  %zu/%zu modes, %.0f s\n", done, total, since(t0));
+          });
       const double wall = since(t0);
-      std::size_t poor = 0, coeffs = t.coefficients.size();
+      std::size_t poor = 0, coeffs = t.coefficients.size(), bem = 0;
       double sources = 0;
-      for (std::size_t i = 0; i < t.mode_count(); ++i)
+      for (std::size_t i = 0; i < t.mode_count(); ++i) {
         poor += t.poor(i), sources += t.modes[i].sources;
+        bem += t.modes[i].method == TransferMethod::Bem;
+      }
+      rusage usage{};
+      getrusage(RUSAGE_SELF, &usage);
       const std::string key =
           std::string(run.name) + (run.mode_threads == 1 ? "_sequential" : "_parallel");
       j["fit"][key] = {{"kernels", kernels->name()},
@@ -103,13 +134,17 @@ int main(int argc, char** argv) {
                        {"solve_s", times.solve},
                        {"expand_s", times.expand},
                        {"poor_fits", poor},
+                       {"bem_modes", bem},
+                       {"peak_rss_gb", double(usage.ru_maxrss) / 1e6},
                        {"mean_sources", sources / double(t.mode_count())},
                        {"coefficients", coeffs}};
       std::printf(
           "fit %-16s %-28s wall %6.2f s | matrices %6.2f  solve %6.2f  expansion %5.2f "
-          "(%s) | mean sources %.0f, %zu coefficients, %zu poor fits\n",
+          "(%s) | mean sources or elements %.0f, %zu coefficients, %zu poor fits, %zu by BEM, "
+          "peak %.1f GB\n",
           key.c_str(), kernels->name().c_str(), wall, times.matrix, times.solve, times.expand,
-          run.mode_threads == 1 ? "s" : "thread-s", sources / double(t.mode_count()), coeffs, poor);
+          run.mode_threads == 1 ? "s" : "thread-s", sources / double(t.mode_count()), coeffs, poor,
+          bem, double(usage.ru_maxrss) / 1e6);
     }
 
     if (!json_path.empty()) std::ofstream(json_path) << j.dump(2) << '\n';

@@ -71,6 +71,7 @@ TEST(BemDriver, SharedSolvesAndSideBySideSolversKeepEveryModesField) {
   shared.bem_shared_frequency = 1e-4;  // each is split between two solvers
   shared.bem.hmatrix_limit = 300;
   shared.bem.threads = 2;
+  shared.bem_solvers = 2;
   const precompute::RadiatingSurface surface(test::icosphere(0.1, 2), alone);
   const double k_low = 2 * std::numbers::pi * 1400 / 343.0;
   const double k_high = 2 * std::numbers::pi * 3000 / 343.0;

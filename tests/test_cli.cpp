@@ -239,6 +239,16 @@ TEST(CliPrecompute, MemoryBudgetRefusesBeforeTheFactorization) {
   EXPECT_NE(r.output.find("nnz(L)"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("--max-memory"), std::string::npos) << r.output;
   EXPECT_EQ(chladni::test::read_file(out), "keep");
+  // The boundary-element transfer is held to the same budget: the eigen-solve fits in 50 MB,
+  // the BEM system on the bar's own 1,968 triangles (about 100 MB) does not.
+  r = run("precompute " + bar + " -o " + out +
+          " --max-modes 3 --transfer-method bem --max-memory 0.05");
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find(bar + ": transfer: boundary elements on the 1968 surface triangles need"),
+            std::string::npos)
+      << r.output;
+  EXPECT_NE(r.output.find("--transfer-method auto or sources"), std::string::npos) << r.output;
+  EXPECT_EQ(chladni::test::read_file(out), "keep");
   r = run("precompute " + bar + " -o " + out + " --max-memory nan");
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("--max-memory"), std::string::npos) << r.output;

@@ -322,10 +322,14 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
     AcousticOptions acoustic = o.acoustic;
     if (acoustic.bem_max_memory <= 0) acoustic.bem_max_memory = eo.max_memory;
     if (!acoustic.bem.gpu) acoustic.bem.gpu = o.gpu;  // BEM rows on the same device
-    bank.transfer = compute_transfer(rs, bank, acoustic, *kernels, &r.transfer_times,
-                                     [&](std::size_t done, std::size_t total) {
-                                       if (p.fraction) p.fraction(double(done) / double(total));
-                                     });
+    try {
+      bank.transfer = compute_transfer(rs, bank, acoustic, *kernels, &r.transfer_times,
+                                       [&](std::size_t done, std::size_t total) {
+                                         if (p.fraction) p.fraction(double(done) / double(total));
+                                       });
+    } catch (const BudgetError& e) {
+      throw BudgetError(origin + ": " + e.what());
+    }
     for (std::size_t i = 0; i < bank.transfer->mode_count(); ++i) {
       r.poor_fits += bank.transfer->poor(i);
       r.max_held_out = std::max(r.max_held_out, double(bank.transfer->modes[i].held_out_error));

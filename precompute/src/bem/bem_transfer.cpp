@@ -22,9 +22,12 @@ namespace {
 
 using cd = std::complex<double>;
 
-std::string gigabytes(double bytes) {
+std::string memory_text(double bytes) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.1f GB", bytes / 1e9);
+  if (bytes < 1e9)
+    std::snprintf(text, sizeof text, "%.0f MB", bytes / 1e6);
+  else
+    std::snprintf(text, sizeof text, "%.2f GB", bytes / 1e9);
   return text;
 }
 
@@ -75,8 +78,8 @@ int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& 
     const double need = bem_memory(surface.mesh().triangles.size(), o.bem);
     throw BudgetError("transfer: boundary elements on the " +
                       std::to_string(surface.mesh().triangles.size()) + " surface triangles need " +
-                      gigabytes(need) + ", more than --max-memory allows (" +
-                      gigabytes(o.bem_max_memory) +
+                      memory_text(need) + ", more than --max-memory allows (" +
+                      memory_text(o.bem_max_memory) +
                       "): raise --max-memory or use --transfer-method auto or sources");
   }
   return best;
@@ -252,7 +255,8 @@ void solve_groups(const RadiatingSurface& surface, const Soundbank& bank,
 int solver_workers(std::size_t elements, std::size_t groups, const AcousticOptions& o) {
   const unsigned cores =
       o.bem.threads > 0 ? unsigned(o.bem.threads) : std::thread::hardware_concurrency();
-  if (elements <= o.bem.hmatrix_limit || cores < 2 || groups < 2) return 1;
+  if (elements <= o.bem.hmatrix_limit || groups < 2 || o.bem_solvers == 1) return 1;
+  if (o.bem_solvers == 0 && cores < 2) return 1;
   if (o.bem_max_memory > 0 && 2 * bem_memory(elements, o.bem) > o.bem_max_memory) return 1;
   return 2;
 }

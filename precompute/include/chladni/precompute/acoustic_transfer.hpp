@@ -40,6 +40,9 @@ struct AcousticOptions {
   /// at their mean wavenumber: the degenerate pairs of symmetric bodies, whose frequencies the
   /// mesh splits by ~1e-5. The change of the radiated field is of the same relative order.
   double bem_shared_frequency = 1e-4;
+  /// Solvers side by side on a hierarchical level (hmat-oss runs on one core): 0 chooses two
+  /// where two cores and the memory for two systems are there, else one; 1 or 2 asks.
+  int bem_solvers = 1;
   BemOptions bem;
   double sound_speed = 343.0;  ///< m/s
   double air_density = 1.204;  ///< kg/m^3 (air at 20 C)
