@@ -297,7 +297,10 @@ void write_paper_database(const std::string& dir, const PaperSoundDb& db, double
 
 PaperSoundDb load_paper_database(const std::string& dir) {
   const std::string index = (fs::path(dir) / "paper_db.json").string();
-  if (!fs::exists(index))
+  std::error_code ec;
+  const bool has_index = fs::exists(index, ec);
+  if (ec) throw InputError(dir + ": " + ec.message());
+  if (!has_index)
     throw InputError(dir +
                      ": not a paper sound database (no paper_db.json; make one with "
                      "'chladni paper-db generate -o " +
@@ -315,7 +318,12 @@ PaperSoundDb load_paper_database(const std::string& dir) {
   const auto read = [&](const json& name, const std::string& path) {
     if (!name.is_string()) json_reader::fail(path, "expected a file name");
     const std::string file = (fs::path(dir) / name.get<std::string>()).string();
-    if (!fs::exists(file)) json_reader::fail(path, "file " + file + " does not exist");
+    std::error_code missing;
+    const bool there = fs::exists(file, missing);
+    if (missing)
+      json_reader::fail(
+          path, "a file name of " + std::to_string(file.size()) + " bytes: " + missing.message());
+    if (!there) json_reader::fail(path, "file " + file + " does not exist");
     AudioBuffer a;
     try {
       a = read_audio(file);

@@ -42,8 +42,10 @@ std::vector<std::string> expand_glob(const std::string& pattern, const std::stri
   const int rc = ::glob(pattern.c_str(), 0, nullptr, &g);
   std::vector<std::string> out;
   if (rc == 0)
-    for (std::size_t i = 0; i < g.gl_pathc; ++i)
-      if (fs::is_regular_file(g.gl_pathv[i])) out.emplace_back(g.gl_pathv[i]);
+    for (std::size_t i = 0; i < g.gl_pathc; ++i) {
+      std::error_code ec;  // unreadable matches are skipped, not thrown
+      if (fs::is_regular_file(g.gl_pathv[i], ec)) out.emplace_back(g.gl_pathv[i]);
+    }
   ::globfree(&g);
   if (out.empty()) throw InputError(where + ": '" + pattern + "' matches no file");
   return out;

@@ -38,7 +38,8 @@ Plan make_plan(const Manifest& m, const RunOptions& o, std::vector<Result>& resu
     for (const std::string& dir : {m.output_dir, log_folder(m, o)}) {
       std::error_code ec;
       fs::create_directories(dir, ec);
-      if (!fs::is_directory(dir)) throw InputError("batch: cannot create folder " + dir);
+      if (!fs::is_directory(dir, ec))
+        throw InputError("batch: cannot create folder " + dir + (ec ? ": " + ec.message() : ""));
     }
   }
   results.assign(m.assets.size(), Result{});
