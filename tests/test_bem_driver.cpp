@@ -2,10 +2,17 @@
 // solve, hierarchical levels run two solvers side by side, and neither changes the result.
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <complex>
+#include <csignal>
 #include <numbers>
+#include <string>
+#include <thread>
 
+#include "../precompute/src/bem/bem_side_process.hpp"
+#include "chladni/core/error.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/core/transfer.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
@@ -48,7 +55,7 @@ Transfer run(const Soundbank& bank, const AcousticOptions& o) {
   std::vector<std::vector<cd>> coeffs(bank.mode_count());
   std::vector<std::size_t> which(bank.mode_count());
   for (std::size_t i = 0; i < which.size(); ++i) which[i] = i;
-  std::size_t done = 0;
+  std::atomic<std::size_t> done{0};
   precompute::compute_transfer_bem(surface, bank, which, o, modes, coeffs, nullptr,
                                    [&] { ++done; });
   EXPECT_EQ(done, bank.mode_count()) << "one progress tick per mode";
@@ -90,6 +97,59 @@ TEST(BemDriver, SharedSolvesAndSideBySideSolversKeepEveryModesField) {
     }
     // The pair's shared wavenumber (1e-5 off) and the compression move the field by ~1e-5.
     EXPECT_LT(std::sqrt(diff / size), 1e-4) << "mode " << i;
+  }
+}
+
+// The forked second solver: what the child emits arrives intact, its times are added, and its
+// failures (an exception, a signal) become errors here rather than missing modes.
+TEST(BemDriver, SideProcessReturnsModesAndReportsFailures) {
+  using precompute::bem_detail::SideProcess;
+  std::vector<std::size_t> got;
+  std::vector<std::vector<cd>> coeffs(3);
+  {
+    SideProcess side(
+        [](const SideProcess::Emit& emit, precompute::TransferTimes& t) {
+          for (std::size_t i = 0; i < 3; ++i) {
+            ModeTransfer mt;
+            mt.wavenumber = 10.0 * double(i + 1);
+            emit(i, mt, std::vector<cd>(i + 2, cd(double(i), -1.0)));
+          }
+          t.solve = 1.5;
+        },
+        [&](std::size_t i, const ModeTransfer& mt, std::vector<cd>&& a) {
+          EXPECT_EQ(mt.wavenumber, 10.0 * double(i + 1));
+          coeffs[i] = std::move(a);
+          got.push_back(i);
+        });
+    precompute::TransferTimes times;
+    side.finish(&times);
+    EXPECT_EQ(times.solve, 1.5);
+  }
+  ASSERT_EQ(got.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    ASSERT_EQ(coeffs[i].size(), i + 2);
+    EXPECT_EQ(coeffs[i].back(), cd(double(i), -1.0));
+  }
+  auto failure = [](const std::function<void()>& fail) {
+    SideProcess side([&](const SideProcess::Emit&, precompute::TransferTimes&) { fail(); },
+                     [](std::size_t, const ModeTransfer&, std::vector<cd>&&) {});
+    try {
+      side.finish(nullptr);
+    } catch (const InternalError& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(failure([] { throw InputError("bem: out of luck"); }), "bem: out of luck");
+  EXPECT_NE(failure([] { std::raise(SIGKILL); }).find("killed by signal 9"), std::string::npos);
+  // Abandoned (the caller's own half failed): the child is stopped, not waited for (else this
+  // test would never end).
+  {
+    SideProcess side(
+        [](const SideProcess::Emit&, precompute::TransferTimes&) {
+          for (;;) std::this_thread::sleep_for(std::chrono::seconds(1));
+        },
+        [](std::size_t, const ModeTransfer&, std::vector<cd>&&) {});
   }
 }
 

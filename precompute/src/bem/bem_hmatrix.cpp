@@ -10,7 +10,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
 #include <numbers>
 #include <string>
 
@@ -20,18 +19,6 @@
 #include "chladni/core/error.hpp"
 
 namespace chladni::precompute::bem_detail {
-namespace {
-thread_local int hmat_worker = -1;
-int hmat_worker_index() {
-  return hmat_worker;
-}
-}  // namespace
-
-void set_hmat_worker(int index) {
-  static std::once_flag registered;
-  std::call_once(registered, [] { hmat_set_worker_index_function(&hmat_worker_index); });
-  hmat_worker = index;
-}
 
 // Everything below is in hmat-oss's numbering of the elements (h), in which every block is a
 // contiguous range of rows and of columns; `client` maps it back to the mesh's.

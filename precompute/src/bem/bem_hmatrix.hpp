@@ -11,10 +11,6 @@
 
 namespace chladni::precompute::bem_detail {
 
-/// Names the calling thread's worker (0, 1, ...; -1: a sequential section) to hmat-oss, which
-/// must know it when several threads call it at once (hmat_set_worker_index_function).
-void set_hmat_worker(int index);
-
 class HMatrixSystem {
  public:
   using cd = std::complex<double>;

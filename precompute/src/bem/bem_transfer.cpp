@@ -12,7 +12,7 @@
 
 #include "../blas_threads.hpp"
 #include "../timing.hpp"
-#include "bem_hmatrix.hpp"
+#include "bem_side_process.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
@@ -230,7 +230,7 @@ void solve_groups(const RadiatingSurface& surface, const Soundbank& bank,
                   const BemSurface& elements, const BemMesh& mesh, BemSolver& solver,
                   std::span<const ModeGroup> groups, const AcousticOptions& o,
                   std::vector<ModeTransfer>& modes, std::vector<std::vector<cd>>& coeffs,
-                  TransferTimes* times, const std::function<void()>& done) {
+                  TransferTimes* times, const std::function<void(std::size_t)>& done) {
   const std::size_t nv = bank.vertices.size();
   for (const ModeGroup& g : groups) {
     std::vector<NormalVelocity> un;
@@ -245,12 +245,12 @@ void solve_groups(const RadiatingSurface& surface, const Soundbank& bank,
       // The series from R outwards at the mode's own wavenumber, so the phase far away is its.
       modes[g.modes[v]] = mt[v];
       modes[g.modes[v]].wavenumber = bank.damped_omega(g.modes[v]) / o.sound_speed;
-      if (done) done();
+      done(g.modes[v]);
     }
   }
 }
 
-// Two solvers at once where one solve keeps one core (hmat-oss is sequential) and the memory
+// Two solvers at once where a solve keeps one core (hmat-oss is sequential) and the memory
 // holds two systems; else one.
 int solver_workers(std::size_t elements, std::size_t groups, const AcousticOptions& o) {
   const unsigned cores =
@@ -274,45 +274,36 @@ void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank
     const BemSurface elements(surface.mesh(), groups[l0].level);
     const BemMesh mesh(elements.mesh);
     const std::span<const ModeGroup> run(groups.data() + l0, l1 - l0);
+    const auto tick = [&](std::size_t) {
+      if (done) done();
+    };
     if (solver_workers(mesh.elements(), run.size(), o) == 1) {
       BemSolver solver(mesh, o.bem);
-      solve_groups(surface, bank, elements, mesh, solver, run, o, modes, coeffs, times, done);
+      solve_groups(surface, bank, elements, mesh, solver, run, o, modes, coeffs, times, tick);
     } else {
-      // The lower and the upper half of the band side by side, one core each, sharing the
-      // near field (computed here on every core).
+      // The lower and the upper half of the band side by side, one core each (the upper in a
+      // forked copy of this process), sharing the near field computed here on every core.
       std::shared_ptr<const BemSolver::NearCache> near = BemSolver(mesh, o.bem).near_field();
       AcousticOptions one = o;
       one.bem.threads = 1;
       const SingleThreadedBlas blas;
       const std::size_t half = (run.size() + 1) / 2;
-      TransferTimes upper_times;
-      std::exception_ptr upper_error;
-      std::thread upper([&] {
-        try {
-          bem_detail::set_hmat_worker(1);
-          BemSolver solver(mesh, one.bem, near);
-          solve_groups(surface, bank, elements, mesh, solver, run.subspan(half), one, modes, coeffs,
-                       &upper_times, done);
-        } catch (...) {
-          upper_error = std::current_exception();
-        }
-      });
-      std::exception_ptr lower_error;
-      try {
-        bem_detail::set_hmat_worker(0);
-        BemSolver solver(mesh, one.bem, near);
-        solve_groups(surface, bank, elements, mesh, solver, run.first(half), one, modes, coeffs,
-                     times, done);
-      } catch (...) {
-        lower_error = std::current_exception();
-      }
-      upper.join();
-      bem_detail::set_hmat_worker(-1);
-      if (lower_error) std::rethrow_exception(lower_error);
-      if (upper_error) std::rethrow_exception(upper_error);
-      if (times)
-        times->matrix += upper_times.matrix, times->solve += upper_times.solve,
-            times->expand += upper_times.expand;
+      bem_detail::SideProcess upper(
+          [&](const bem_detail::SideProcess::Emit& emit, TransferTimes& child_times) {
+            BemSolver solver(mesh, one.bem, near);
+            solve_groups(surface, bank, elements, mesh, solver, run.subspan(half), one, modes,
+                         coeffs, &child_times,
+                         [&](std::size_t i) { emit(i, modes[i], coeffs[i]); });
+          },
+          [&](std::size_t i, const ModeTransfer& t, std::vector<cd>&& a) {
+            modes[i] = t;
+            coeffs[i] = std::move(a);
+            if (done) done();
+          });
+      BemSolver solver(mesh, one.bem, near);
+      solve_groups(surface, bank, elements, mesh, solver, run.first(half), one, modes, coeffs,
+                   times, tick);
+      upper.finish(times);
     }
     l0 = l1;
   }

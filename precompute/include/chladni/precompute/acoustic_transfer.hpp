@@ -40,8 +40,9 @@ struct AcousticOptions {
   /// at their mean wavenumber: the degenerate pairs of symmetric bodies, whose frequencies the
   /// mesh splits by ~1e-5. The change of the radiated field is of the same relative order.
   double bem_shared_frequency = 1e-4;
-  /// Solvers side by side on a hierarchical level (hmat-oss runs on one core): 0 chooses two
-  /// where two cores and the memory for two systems are there, else one; 1 or 2 asks.
+  /// Solvers side by side on a hierarchical level (hmat-oss runs on one core; the second one in
+  /// a forked process): 0 chooses two where two cores and the memory for two systems are there,
+  /// else one; 1 or 2 asks.
   int bem_solvers = 1;
   BemOptions bem;
   double sound_speed = 343.0;  ///< m/s
@@ -205,7 +206,8 @@ double bem_memory(std::size_t n, const BemOptions& options);
 int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& options);
 
 /// compute_transfer's BEM path for the listed modes (ascending frequency, so each GMRES solve is
-/// preconditioned by the LU of a nearby frequency); fills modes[i] and coeffs[i] of each.
+/// preconditioned by the LU of a nearby frequency); fills modes[i] and coeffs[i] of each and
+/// calls done() per mode (from a second thread too, with bem_solvers 2).
 void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank,
                           const std::vector<std::size_t>& which, const AcousticOptions& options,
                           std::vector<ModeTransfer>& modes,
