@@ -63,6 +63,12 @@ TEST(BemRefine, FarFieldConvergesAsTheElementsHalve) {
   const precompute::RadiatingSurface surf(s, o);
   EXPECT_EQ(precompute::bem_level(surf, k, o), 2);
   EXPECT_EQ(precompute::bem_level(surf, 0.25 * k, o), 0);
+  o.bem_extra_levels = 1;  // every element halved once more
+  EXPECT_EQ(precompute::bem_level(surf, 0.25 * k, o), 1);
+  EXPECT_EQ(precompute::bem_level(surf, k, o), -1) << "20,480 elements: over auto's cap";
+  o.method = precompute::AcousticOptions::Method::Bem;
+  EXPECT_EQ(precompute::bem_level(surf, k, o), 3);
+  o = {};
   o.bem_auto_elements = s.triangles.size();  // no room to split: the fit takes over
   EXPECT_EQ(precompute::bem_level(surf, k, o), -1);
   EXPECT_EQ(precompute::resolve_method(surf, k, o), precompute::AcousticOptions::Method::Sources);

@@ -118,6 +118,8 @@ void AcousticOptions::validate() const {
   if (min_sources < 1 || max_sources < min_sources)
     throw InputError("transfer: need 1 <= min sources <= max sources");
   if (max_collocation < 16) throw InputError("transfer: max collocation must be >= 16");
+  if (bem_extra_levels < 0 || bem_extra_levels > 3)
+    throw InputError("transfer: bem extra levels must lie in [0, 3]");
   if (bem_solvers < 0 || bem_solvers > 2)
     throw InputError("transfer: bem solvers must be 0, 1 or 2");
   if (!(bem_max_memory >= 0) || !std::isfinite(bem_max_memory))

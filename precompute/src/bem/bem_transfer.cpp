@@ -68,10 +68,10 @@ int bem_level(const RadiatingSurface& surface, double k, const AcousticOptions& 
     return elements <= cap &&
            (o.bem_max_memory <= 0 || bem_memory(std::size_t(elements), o.bem) <= o.bem_max_memory);
   };
-  int best = -1;
+  int best = -1, extra = o.bem_extra_levels;
   for (int level = 0; level <= 4 && fits(n); ++level, n *= 4, h /= 2) {
     best = level;
-    if (h * k <= target) return level;
+    if (h * k <= target && extra-- == 0) return level;
   }
   if (!forced) return -1;
   if (best < 0) {

@@ -33,6 +33,9 @@ struct AcousticOptions {
   /// at 26,000 elements on 2 cores).
   std::size_t bem_max_elements = 32768;
   double bem_elements_per_wavelength = 6.0;
+  /// Splits beyond what the wavelength asks: 1 halves every element (a convergence check,
+  /// bench/bem_convergence.cpp).
+  int bem_extra_levels = 0;
   /// Bytes the BEM system may take (bem_memory; 0: no limit). Element meshes over it are not
   /// used: auto gives the mode sources, bem the finest mesh that fits (BudgetError if none does).
   double bem_max_memory = 0;
