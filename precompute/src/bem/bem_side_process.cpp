@@ -2,6 +2,7 @@
 // then the child's times and an end mark (or its error).
 #include "bem_side_process.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -88,7 +89,7 @@ SideProcess::SideProcess(
     std::function<void(std::size_t, const ModeTransfer&, std::vector<cd>&&)> receive)
     : receive_(std::move(receive)) {
   int fds[2];
-  if (::pipe(fds) != 0)
+  if (::pipe2(fds, O_CLOEXEC) != 0)  // not inherited by programs this process starts later
     throw InternalError(std::string("bem: cannot open a pipe: ") + std::strerror(errno));
   const pid_t pid = ::fork();
   if (pid < 0) {
