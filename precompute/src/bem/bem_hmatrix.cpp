@@ -165,17 +165,12 @@ void HMatrixSystem::assemble(double k, std::span<const std::vector<cd>> qs,
   bs.assign(count, std::vector<cd>(n, cd(0.0)));
   // Per row: the near corrections, the self term, and b_i = -(alpha/2) q_i - sum_j B_ij q_j with
   // the centroid rule's B row (far_rhs) corrected near i, for every q at once.
-  std::vector<std::vector<double>> qre(count, std::vector<double>(n)), qim = qre;
-  std::vector<const double*> pre(count), pim(count);
-  for (std::size_t v = 0; v < count; ++v) {
-    for (std::size_t j = 0; j < n; ++j) qre[v][j] = qs[v][j].real(), qim[v][j] = qs[v][j].imag();
-    pre[v] = qre[v].data();
-    pim[v] = qim[v].data();
-  }
+  const SplitRightHandSides split(qs, 0);
   parallel_for(n, s.options.threads, [&](std::size_t i0, std::size_t i1) {
     std::vector<cd> rhs(count);
     for (std::size_t i = i0; i < i1; ++i) {
-      far_rhs(s.cache.far, m.centroid[i], m.normal[i], k, s.al, pre, pim, i, rhs.data());
+      far_rhs(s.cache.far, m.centroid[i], m.normal[i], k, s.al, split.pre, split.pim, i,
+              rhs.data());
       std::size_t e = s.cache_start[i];
       near_row(m, s.cache, k, alpha, i, [&](uint32_t j, cd da, cd db) {
         s.values[s.slot[e++]] = da;

@@ -126,6 +126,21 @@ struct FarGeometry {
 void far_row(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k, double al, double* rre,
              double* rim, double* tre, double* tim);
 
+/// Right-hand sides qs[first..] as separate real and imaginary arrays, the layout far_rhs reads.
+struct SplitRightHandSides {
+  SplitRightHandSides(std::span<const std::vector<std::complex<double>>> qs, std::size_t first) {
+    for (std::size_t v = first; v < qs.size(); ++v) {
+      std::vector<double>& r = re.emplace_back(qs[v].size());
+      std::vector<double>& i = im.emplace_back(qs[v].size());
+      for (std::size_t j = 0; j < qs[v].size(); ++j) r[j] = qs[v][j].real(), i[j] = qs[v][j].imag();
+    }
+    for (std::size_t v = 0; v < re.size(); ++v)
+      pre.push_back(re[v].data()), pim.push_back(im[v].data());
+  }
+  std::vector<std::vector<double>> re, im;
+  std::vector<const double*> pre, pim;
+};
+
 /// out[v] = sum_(j != skip) (S + a K')_j q_j for each right-hand side q = qre[v] + i qim[v] by
 /// the centroid rule: the far part of a row's right-hand sides without storing the row.
 void far_rhs(const FarGeometry& g, const Vec3& x, const Vec3& nx, double k, double al,

@@ -113,13 +113,7 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, BemGpuRows* g
   const cd alpha = coupling(m, k, o);
   if (gpu) {  // centroid-rule rows on the device, block by block; the rest on the CPU
     // The device sums the first right-hand side; any others are summed here.
-    std::vector<std::vector<double>> qre(count, std::vector<double>(n)), qim = qre;
-    std::vector<const double*> pre, pim;
-    for (std::size_t v = 1; v < count; ++v) {
-      for (std::size_t j = 0; j < n; ++j) qre[v][j] = qs[v][j].real(), qim[v][j] = qs[v][j].imag();
-      pre.push_back(qre[v].data());
-      pim.push_back(qim[v].data());
-    }
+    const SplitRightHandSides more_qs(qs, 1);
     std::vector<std::complex<float>> entries, rhs;
     for (std::size_t r0 = 0; r0 < n; r0 += gpu->block_rows()) {
       const std::size_t rows = std::min(gpu->block_rows(), n - r0);
@@ -132,8 +126,8 @@ void assemble(const BemMesh& m, const BemSolver::NearCache& cache, BemGpuRows* g
           for (std::size_t j = 0; j < n; ++j) row[j] = cd(entries[r * n + j]);
           bs[0][i] = cd(rhs[r]);
           if (count > 1)
-            far_rhs(cache.far, m.centroid[i], m.normal[i], k, alpha.imag(), pre, pim, i,
-                    more.data());
+            far_rhs(cache.far, m.centroid[i], m.normal[i], k, alpha.imag(), more_qs.pre,
+                    more_qs.pim, i, more.data());
           for (std::size_t v = 1; v < count; ++v) bs[v][i] = more[v - 1];
           finish_row(m, cache, k, alpha, qs, o, i, bs, row);
         }
