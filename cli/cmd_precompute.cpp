@@ -24,6 +24,7 @@ struct PrecomputeArgs {
                                           mass = "consistent", json_path;
   double scale = 1, E = NAN, nu = NAN, rho = NAN, max_freq = 20000, sample_rate = 48000;
   double max_tet_volume = 0, tolerance = 0.01;
+  int max_meshes = 4;
   double max_memory_gb = -1;  // negative: 80 % of the memory available
   int order = 2, threads = 0;
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
@@ -82,8 +83,10 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
     passes.push_back({{"tetrahedra", m.tets},
                       {"dofs", m.dofs},
                       {"worst_error", m.worst_error},
+                      {"max_tet_volume", m.max_tet_volume},
                       {"seconds", m.seconds}});
   j["accuracy"] = {{"tolerance", a.tolerance},
+                   {"max_meshes", a.max_meshes},
                    {"converged", r.converged},
                    {"reason", r.unconverged_reason},
                    {"meshes", passes}};
@@ -139,6 +142,7 @@ void run_precompute(const PrecomputeArgs& a) {
   o.sample_rate = a.sample_rate;
   o.max_tet_volume = a.max_tet_volume;
   o.tolerance = a.tolerance;
+  o.max_passes = a.max_meshes;
   o.max_memory = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
   o.threads = a.threads;
   o.mode_cap = std::max(a.mode_cap, a.max_modes);
@@ -258,8 +262,13 @@ void add_precompute(CLI::App& app, bool run) {
       ->check(finite_in(0, 1e6));
   cmd->add_option("--tolerance", a->tolerance,
                   "Target relative frequency error of every mode asked for, by the error "
-                  "estimate; the mesh is refined where it asks (at most 4 meshes)")
+                  "estimate; the mesh is refined where it asks (at most --max-meshes meshes)")
       ->check(finite_in(1e-4, 0.5))
+      ->capture_default_str();
+  cmd->add_option("--max-meshes", a->max_meshes,
+                  "Meshes solved at most while refining toward --tolerance (1: the first mesh "
+                  "only, with its error estimate)")
+      ->check(CLI::Range(1, 8))
       ->capture_default_str();
   cmd->add_option("--max-memory", a->max_memory_gb,
                   "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "

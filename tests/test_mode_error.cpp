@@ -4,11 +4,16 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "../precompute/src/surface_sample.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/precompute/eigensolve.hpp"
+#include "chladni/precompute/fem.hpp"
 #include "chladni/precompute/mode_error.hpp"
 #include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute/tet_mesh.hpp"
 #include "fem_fixtures.hpp"
 
 using namespace chladni;
@@ -193,6 +198,51 @@ TEST(ModeError, RefinementStopsShortWithTheReason) {
   EXPECT_EQ(b.vertices.size(), b1.vertices.size());
   ASSERT_EQ(r.frequency_error.size(), 4u);
   for (double e : r.frequency_error) EXPECT_GT(e, 0);
+}
+
+// A refinement step over the memory budget is retried with a smaller one instead of ending the
+// refinement: with a budget between the first mesh's need and the full step's, a second mesh
+// finer than the first and coarser than the full step is solved.
+TEST(ModeError, RefinementOverTheBudgetTakesASmallerStep) {
+  PrecomputeOptions o;
+  o.max_modes = 4;
+  o.transfer = false;
+  o.tolerance = 1e-4;  // asks for the largest step
+  o.max_passes = 2;
+  o.max_memory = 0;  // no limit
+  const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {4, 2, 2});
+  PrecomputeReport full;
+  precompute_surface(box, "box", o, full);
+  ASSERT_EQ(full.passes.size(), 2u);
+  // What each mesh's eigen-solve needs at least, by the estimate precompute checks: the factor
+  // and the smallest Lanczos basis (a budget shrinks the basis before it refuses).
+  EigenOptions eo;
+  eo.modes = o.max_modes;
+  eo.mode_cap = 1;
+  eo.max_memory = 1e18;
+  auto need = [&](double volume) {
+    TetOptions t = o.tet;
+    t.max_volume = volume;
+    return check_eigen_memory(make_fem_mesh(tetrahedralize(box, t), o.order), eo);
+  };
+  const double m1 = need(full.passes[0].max_tet_volume), m2 = need(full.max_tet_volume);
+  ASSERT_GT(m2, 2 * m1) << m1 << " " << m2;
+  o.max_memory = std::pow(m1, 0.25) * std::pow(m2, 0.75);
+  std::vector<std::string> notes;
+  Progress p;
+  p.note = [&](const std::string& n) { notes.push_back(n); };
+  PrecomputeReport r;
+  precompute_surface(box, "box", o, r, p);
+  ASSERT_EQ(r.passes.size(), 2u);
+  EXPECT_GT(r.passes[1].tets, r.passes[0].tets);
+  EXPECT_LT(r.passes[1].tets, full.passes[1].tets);
+  EXPECT_LT(r.passes[1].worst_error, r.passes[0].worst_error);
+  EXPECT_GT(r.max_tet_volume, full.max_tet_volume);
+  EXPECT_EQ(r.max_tet_volume, r.passes[1].max_tet_volume);
+  bool said = false;
+  for (const std::string& n : notes)
+    said = said || n.find("trying a smaller refinement step") != std::string::npos;
+  EXPECT_TRUE(said);
 }
 
 // All modes below --max-freq on a mesh that does not fit the budget: refused before assembly

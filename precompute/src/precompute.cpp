@@ -144,8 +144,25 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     try {
       f = fem_pass(std::move(tets), o, eo, p, sw);
     } catch (const InputError& e) {
-      // A refined mesh that cannot be solved (over the budget, or a degenerate tetrahedron
-      // from TetGen) leaves the previous one standing.
+      // A refinement over the memory budget is retried with half the step (in log volume)
+      // while it still refines by at least 1.5x in volume: a thin part may need only a little
+      // more. Any other failure (a degenerate tetrahedron from TetGen) leaves the previous mesh
+      // standing.
+      const double milder = std::sqrt(meshed * r.max_tet_volume);
+      if (best && dynamic_cast<const BudgetError*>(&e) && r.max_tet_volume > 1.5 * milder) {
+        if (p.note)
+          p.note("mesh " + std::to_string(pass) + " would exceed --max-memory; trying a smaller " +
+                 "refinement step");
+        topt.max_volume = meshed = milder;
+        try {
+          tets = tetrahedralize(surface, topt);
+        } catch (const InputError& t) {
+          r.unconverged_reason = std::string("the next refinement failed: ") + t.what();
+          break;
+        }
+        --pass;
+        continue;
+      }
       if (best) {
         r.converged = false;
         r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
@@ -163,7 +180,7 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     const double worst = worst_error(f, o);
     r.passes.push_back(
         {f.tets.tets.size(), f.dofs, worst,
-         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count()});
+         std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(), meshed});
     if (p.note)
       p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
              " tetrahedra, largest estimated frequency error " + percent(worst));
