@@ -90,9 +90,7 @@ double refined_volume(const FemPass& f, double worst, const PrecomputeOptions& o
   const TetMesh& m = f.tets;
   double weighted = 0, weight = 0;
   for (std::size_t e = 0; e < m.tets.size(); ++e) {
-    const auto& t = m.tets[e];
-    const Vec3 &a = m.nodes[t[0]], &b = m.nodes[t[1]], &c = m.nodes[t[2]], &d = m.nodes[t[3]];
-    const double v = std::abs(dot(cross(sub(b, a), sub(c, a)), sub(d, a))) / 6;
+    const double v = std::abs(tet_volume(m, e));
     weighted += f.errors.element[e] * std::cbrt(6 * std::numbers::sqrt2 * v);  // regular edge
     weight += f.errors.element[e];
   }

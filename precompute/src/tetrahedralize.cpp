@@ -157,9 +157,7 @@ TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   for (int t = 0; t < out.numberoftetrahedra; ++t) {
     auto& tet = m.tets[t];
     for (int k = 0; k < 4; ++k) tet[k] = static_cast<uint32_t>(out.tetrahedronlist[4 * t + k]);
-    const Vec3 &a = m.nodes[tet[0]], &b = m.nodes[tet[1]], &c = m.nodes[tet[2]],
-               &d = m.nodes[tet[3]];
-    if (dot(cross(sub(b, a), sub(c, a)), sub(d, a)) < 0) std::swap(tet[2], tet[3]);
+    if (tet_volume(m, std::size_t(t)) < 0) std::swap(tet[2], tet[3]);
   }
   return m;
 }

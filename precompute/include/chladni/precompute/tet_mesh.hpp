@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "chladni/core/material.hpp"
+#include "chladni/core/vec3.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 
 namespace chladni::precompute {
@@ -37,6 +38,13 @@ struct TetQuality {
 TetMesh tetrahedralize(const SurfaceMesh& surface, const TetOptions& options);
 
 TetQuality tet_quality(const TetMesh& mesh);
+
+/// Signed volume of tetrahedron `e` (positive for the orientation TetMesh keeps).
+inline double tet_volume(const TetMesh& m, std::size_t e) {
+  const auto& t = m.tets[e];
+  const Vec3& a = m.nodes[t[0]];
+  return dot(cross(sub(m.nodes[t[1]], a), sub(m.nodes[t[2]], a)), sub(m.nodes[t[3]], a)) / 6;
+}
 
 /// The coarsest tets worth meshing with: a few hundred in the surface's bounding box.
 double coarse_max_volume(const SurfaceMesh& surface);
