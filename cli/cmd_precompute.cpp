@@ -25,6 +25,7 @@ struct PrecomputeArgs {
   double scale = 1, E = NAN, nu = NAN, rho = NAN, max_freq = 20000, sample_rate = 48000;
   double max_tet_volume = 0, tolerance = 0.01;
   int max_meshes = 4;
+  std::string refinement = "local";
   double max_memory_gb = -1;  // negative: 80 % of the memory available
   int order = 2, threads = 0;
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
@@ -85,11 +86,9 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                       {"worst_error", m.worst_error},
                       {"max_tet_volume", m.max_tet_volume},
                       {"seconds", m.seconds}});
-  j["accuracy"] = {{"tolerance", a.tolerance},
-                   {"max_meshes", a.max_meshes},
-                   {"converged", r.converged},
-                   {"reason", r.unconverged_reason},
-                   {"meshes", passes}};
+  j["accuracy"] = {{"tolerance", a.tolerance},       {"max_meshes", a.max_meshes},
+                   {"refinement", a.refinement},     {"converged", r.converged},
+                   {"reason", r.unconverged_reason}, {"meshes", passes}};
   nlohmann::json freqs = nlohmann::json::array();
   for (double w : bank.omega) freqs.push_back(w / (2 * std::numbers::pi));
   j["frequencies_hz"] = freqs;
@@ -143,6 +142,7 @@ void run_precompute(const PrecomputeArgs& a) {
   o.max_tet_volume = a.max_tet_volume;
   o.tolerance = a.tolerance;
   o.max_passes = a.max_meshes;
+  o.local_refinement = a.refinement == "local";
   o.max_memory = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
   o.threads = a.threads;
   o.mode_cap = std::max(a.mode_cap, a.max_modes);
@@ -269,6 +269,11 @@ void add_precompute(CLI::App& app, bool run) {
                   "Meshes solved at most while refining toward --tolerance (1: the first mesh "
                   "only, with its error estimate)")
       ->check(CLI::Range(1, 8))
+      ->capture_default_str();
+  cmd->add_option("--refinement", a->refinement,
+                  "local: refine where the estimate puts the error (TetGen refining the last "
+                  "mesh); uniform: mesh the whole solid again under a smaller bound")
+      ->check(CLI::IsMember({"local", "uniform"}))
       ->capture_default_str();
   cmd->add_option("--max-memory", a->max_memory_gb,
                   "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "

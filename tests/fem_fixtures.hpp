@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "chladni/core/soundbank.hpp"
+#include "chladni/core/vec3.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 
 namespace chladni::test {
@@ -76,6 +77,36 @@ inline SurfaceMesh box_surface(const Vec3& size, const std::array<int, 3>& n) {
             m.triangles.push_back({q[0], q[2], q[1]}), m.triangles.push_back({q[0], q[3], q[2]});
           }
         }
+  }
+  return m;
+}
+
+/// An L-section prism: a `block` x `block` square section with a fin of thickness `fin` reaching
+/// to x = `reach`, extruded `depth` along y; outward triangles. The thin fin holds the error of
+/// a uniform mesh.
+inline SurfaceMesh l_section_surface(double block, double fin, double reach, double depth) {
+  const double P[7][2] = {{0, 0},       {block, 0},     {reach, 0}, {reach, fin},
+                          {block, fin}, {block, block}, {0, block}};  // (x, z), counter-clockwise
+  SurfaceMesh m;
+  for (double y : {0.0, depth})
+    for (const auto& p : P) m.vertices.push_back({p[0], y, p[1]});
+  auto add = [&](uint32_t a, uint32_t b, uint32_t c, const Vec3& out) {
+    const Vec3 n = cross(sub(m.vertices[b], m.vertices[a]), sub(m.vertices[c], m.vertices[a]));
+    if (dot(n, out) > 0)
+      m.triangles.push_back({a, b, c});
+    else
+      m.triangles.push_back({a, c, b});
+  };
+  const uint32_t caps[5][3] = {{0, 1, 4}, {0, 4, 5}, {0, 5, 6}, {1, 2, 3}, {1, 3, 4}};
+  for (const auto& t : caps) {
+    add(t[0], t[1], t[2], {0, -1, 0});
+    add(t[0] + 7, t[1] + 7, t[2] + 7, {0, 1, 0});
+  }
+  for (uint32_t i = 0; i < 7; ++i) {
+    const uint32_t j = (i + 1) % 7;
+    const Vec3 out{P[j][1] - P[i][1], 0, P[i][0] - P[j][0]};
+    add(i, j, j + 7, out);
+    add(i, j + 7, i + 7, out);
   }
   return m;
 }

@@ -175,17 +175,64 @@ TEST(Tetrahedralize, PreservesTheSurfaceAndFillsTheVolume) {
   EXPECT_GT(q.min_dihedral_deg, 5.0);
   // Volume bound honoured (TetGen's -a).
   const double max_v = 2e-7 * (1 + 1e-9);
-  for (const auto& tet : t.tets) {
-    const Vec3 &a = t.nodes[tet[0]], &b = t.nodes[tet[1]], &c = t.nodes[tet[2]],
-               &d = t.nodes[tet[3]];
-    const double v =
-        ((b[0] - a[0]) * ((c[1] - a[1]) * (d[2] - a[2]) - (c[2] - a[2]) * (d[1] - a[1])) -
-         (b[1] - a[1]) * ((c[0] - a[0]) * (d[2] - a[2]) - (c[2] - a[2]) * (d[0] - a[0])) +
-         (b[2] - a[2]) * ((c[0] - a[0]) * (d[1] - a[1]) - (c[1] - a[1]) * (d[0] - a[0]))) /
-        6;
-    ASSERT_GT(v, 0);
-    ASSERT_LE(v, max_v);
+  for (std::size_t e = 0; e < t.tets.size(); ++e) {
+    ASSERT_GT(tet_volume(t, e), 0);
+    ASSERT_LE(tet_volume(t, e), max_v);
   }
+}
+
+// Local refinement (TetGen -r): the tetrahedra given a bound are split until they meet it, the
+// others are left nearly alone, the nodes are kept in order, the volume is still filled, and
+// the new boundary is closed and outward (its divergence integral is the volume).
+TEST(Tetrahedralize, RefineTetsRefinesWhereAskedAndKeepsTheNodes) {
+  TetOptions o;
+  o.max_volume = 2e-5;
+  const TetMesh t = tetrahedralize(test::box_surface({0.3, 0.1, 0.1}, {3, 1, 1}), o);
+  auto centre_x = [](const TetMesh& m, std::size_t e) {
+    double x = 0;
+    for (uint32_t v : m.tets[e]) x += m.nodes[v][0] / 4;
+    return x;
+  };
+  std::vector<double> bound(t.tets.size(), -1.0);
+  std::size_t right = 0;
+  for (std::size_t e = 0; e < t.tets.size(); ++e) {
+    if (centre_x(t, e) < 0.1) bound[e] = tet_volume(t, e) / 8;
+    if (centre_x(t, e) > 0.2) ++right;
+  }
+  const TetMesh r = refine_tets(t, bound, o);
+  ASSERT_GE(r.nodes.size(), t.nodes.size());
+  for (std::size_t v = 0; v < t.nodes.size(); ++v) ASSERT_EQ(r.nodes[v], t.nodes[v]);
+  EXPECT_EQ(r.surface_vertices, t.surface_vertices);
+  std::size_t left_after = 0, right_after = 0, left_before = 0;
+  double volume = 0;
+  for (std::size_t e = 0; e < r.tets.size(); ++e) {
+    const double v = tet_volume(r, e);
+    ASSERT_GT(v, 0);
+    volume += v;
+    if (centre_x(r, e) < 0.1) ++left_after;
+    if (centre_x(r, e) > 0.2) ++right_after;
+  }
+  for (std::size_t e = 0; e < t.tets.size(); ++e) left_before += centre_x(t, e) < 0.1;
+  EXPECT_NEAR(volume, 0.003, 1e-12);
+  EXPECT_GT(left_after, 4 * left_before) << left_before;
+  EXPECT_LT(right_after, 2 * right) << right;  // grading spills over a little, no more
+  const TetQuality q = tet_quality(r);
+  EXPECT_GT(q.min_dihedral_deg, 5.0);
+  // Closed and outward: every edge in two boundary faces, in opposite directions, and the
+  // divergence theorem on x gives the volume.
+  std::map<std::pair<uint32_t, uint32_t>, int> edges;
+  double div = 0;
+  for (const auto& f : r.surface_triangles) {
+    for (int k = 0; k < 3; ++k) ++edges[{f[k], f[(k + 1) % 3]}];
+    const Vec3 &a = r.nodes[f[0]], &b = r.nodes[f[1]], &c = r.nodes[f[2]];
+    div += (a[0] + b[0] + c[0]) / 3 * cross(sub(b, a), sub(c, a))[0] / 2;
+  }
+  for (const auto& [e, n] : edges) {
+    ASSERT_EQ(n, 1);
+    ASSERT_EQ(edges.count({e.second, e.first}), 1u);
+  }
+  EXPECT_NEAR(div, 0.003, 1e-12);
+  EXPECT_THROW(refine_tets(t, std::vector<double>(3, 1.0), o), InternalError);
 }
 
 TEST(Tetrahedralize, AutoSizeShrinksWithFrequencyAndOrder) {

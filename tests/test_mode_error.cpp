@@ -200,6 +200,33 @@ TEST(ModeError, RefinementStopsShortWithTheReason) {
   for (double e : r.frequency_error) EXPECT_GT(e, 0);
 }
 
+// A thin fin on a block: uniform refinement spends its elements on the block, and under -Y
+// keeps the fin's large surface triangles, whose neighbours become slivers. Refining where the
+// estimate puts the error reaches the tolerance with far fewer elements, and both agree on the
+// frequencies within their estimates.
+TEST(ModeError, LocalRefinementMeetsTheToleranceOnAThinFin) {
+  const SurfaceMesh fin = test::l_section_surface(0.04, 0.004, 0.12, 0.04);
+  PrecomputeOptions o;
+  o.max_modes = 6;
+  o.transfer = false;
+  PrecomputeReport local;
+  const Soundbank a = precompute_surface(fin, "fin", o, local);
+  EXPECT_TRUE(local.converged) << local.unconverged_reason;
+  ASSERT_GE(local.passes.size(), 2u);
+  o.local_refinement = false;
+  o.max_passes = 2;
+  PrecomputeReport uniform;
+  const Soundbank b = precompute_surface(fin, "fin", o, uniform);
+  ASSERT_EQ(uniform.passes.size(), 2u);
+  EXPECT_LT(2 * local.tets, uniform.tets);
+  EXPECT_LT(local.passes.back().worst_error, uniform.passes.back().worst_error);
+  ASSERT_EQ(a.omega.size(), b.omega.size());
+  for (std::size_t i = 0; i < a.omega.size(); ++i)
+    EXPECT_NEAR(a.omega[i] / b.omega[i], 1.0,
+                local.frequency_error[i] + uniform.frequency_error[i] + 1e-3)
+        << "mode " << i;
+}
+
 // A refinement step over the memory budget is retried with a smaller one instead of ending the
 // refinement: with a budget between the first mesh's need and the full step's, a second mesh
 // finer than the first and coarser than the full step is solved.
@@ -209,7 +236,8 @@ TEST(ModeError, RefinementOverTheBudgetTakesASmallerStep) {
   o.transfer = false;
   o.tolerance = 1e-4;  // asks for the largest step
   o.max_passes = 2;
-  o.max_memory = 0;  // no limit
+  o.local_refinement = false;  // uniform steps: meshes the test can make again
+  o.max_memory = 0;            // no limit
   const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {4, 2, 2});
   PrecomputeReport full;
   precompute_surface(box, "box", o, full);

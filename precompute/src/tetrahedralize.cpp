@@ -1,7 +1,5 @@
 // TetGen wrapper: the only unit that includes tetgen.h (AGPL; precompute only, DESIGN.md).
-#include <sys/wait.h>
 #include <tetgen.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -16,6 +14,7 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
+#include "tetgen_child.hpp"
 
 namespace chladni::precompute {
 namespace {
@@ -162,96 +161,84 @@ TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   return m;
 }
 
-void append(std::vector<char>& out, const void* p, std::size_t n) {
-  const char* c = static_cast<const char*>(p);
-  out.insert(out.end(), c, c + n);
-}
-
-void read_into(const std::vector<char>& in, std::size_t& at, void* p, std::size_t n) {
-  if (in.size() - at < n) throw InternalError("TetGen's child process sent a short mesh");
-  std::memcpy(p, in.data() + at, n);
-  at += n;
-}
-
-bool write_all(int fd, const char* p, std::size_t n) {
-  while (n > 0) {
-    const ssize_t w = write(fd, p, n);
-    if (w < 0 && errno == EINTR) continue;
-    if (w <= 0) return false;
-    p += w, n -= std::size_t(w);
-  }
-  return true;
-}
-
-// Runs run_tetgen in a child process and reads its mesh back through a pipe. Returns nothing,
-// with `crash` saying how, when the child dies; rethrows the child's InputError.
-std::optional<TetMesh> tetgen_isolated(const SurfaceMesh& s, const TetOptions& o,
-                                       std::string& crash) {
-  int fd[2];
-  if (pipe(fd) != 0) return run_tetgen(s, o);  // no isolation to be had: run in-process
-  const pid_t pid = fork();
-  if (pid < 0) {
-    close(fd[0]), close(fd[1]);
-    return run_tetgen(s, o);
-  }
-  if (pid == 0) {
-    close(fd[0]);
-    if (std::getenv("CHLADNI_TEST_TETGEN_ABORT")) std::abort();  // tests: TetGen's assertion
-    std::string msg;
-    std::vector<char> bytes;
-    char status = 0;
-    try {
-      const TetMesh m = run_tetgen(s, o);
-      const uint64_t head[4] = {m.nodes.size(), m.tets.size(), m.surface_vertices,
-                                m.surface_triangles.size()};
-      append(bytes, head, sizeof head);
-      append(bytes, m.nodes.data(), m.nodes.size() * sizeof(Vec3));
-      append(bytes, m.tets.data(), m.tets.size() * sizeof(m.tets[0]));
-      append(bytes, m.surface_triangles.data(),
-             m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
-    } catch (const std::exception& e) {
-      status = 1;
-      msg = e.what();
-      bytes.assign(msg.begin(), msg.end());
+// The tets' boundary faces, each oriented away from its tet's fourth vertex.
+std::vector<std::array<uint32_t, 3>> boundary_faces(const TetMesh& m) {
+  std::map<std::array<uint32_t, 3>, std::pair<int, std::array<uint32_t, 4>>> faces;
+  for (const auto& t : m.tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      std::array<uint32_t, 4> f{t[(skip + 1) % 4], t[(skip + 2) % 4], t[(skip + 3) % 4], t[skip]};
+      std::array<uint32_t, 3> key{f[0], f[1], f[2]};
+      std::sort(key.begin(), key.end());
+      auto& e = faces[key];
+      e.first++, e.second = f;
     }
-    const bool ok = write_all(fd[1], &status, 1) && write_all(fd[1], bytes.data(), bytes.size());
-    close(fd[1]);
-    _exit(ok ? 0 : 1);
+  std::vector<std::array<uint32_t, 3>> out;
+  for (const auto& [key, e] : faces) {
+    if (e.first != 1) continue;
+    const auto& f = e.second;
+    const Vec3 &a = m.nodes[f[0]], &b = m.nodes[f[1]], &c = m.nodes[f[2]], &d = m.nodes[f[3]];
+    if (dot(cross(sub(b, a), sub(c, a)), sub(d, a)) > 0)
+      out.push_back({f[0], f[2], f[1]});
+    else
+      out.push_back({f[0], f[1], f[2]});
   }
-  close(fd[1]);
-  std::vector<char> bytes;
-  char buf[1 << 16];
-  for (;;) {
-    const ssize_t n = read(fd[0], buf, sizeof buf);
-    if (n > 0)
-      bytes.insert(bytes.end(), buf, buf + n);
-    else if (n == 0 || errno != EINTR)
-      break;
+  return out;
+}
+
+// TetGen -r: refines an existing mesh under per-tetrahedron volume bounds (-a with no number
+// reads them from tetrahedronvolumelist; -1 leaves a tetrahedron unbounded). Without -Y the
+// boundary faces may be split, so a thin wall gets interior points near it.
+TetMesh run_tetgen_refine(const TetMesh& m, const std::vector<double>& bound, const TetOptions& o) {
+  tetgenio in, out;
+  in.firstnumber = 0;
+  in.numberofpoints = static_cast<int>(m.nodes.size());
+  in.pointlist = new REAL[3 * m.nodes.size()];
+  for (std::size_t v = 0; v < m.nodes.size(); ++v)
+    for (int k = 0; k < 3; ++k) in.pointlist[3 * v + k] = m.nodes[v][k];
+  in.numberoftetrahedra = static_cast<int>(m.tets.size());
+  in.numberofcorners = 4;
+  in.tetrahedronlist = new int[4 * m.tets.size()];
+  in.tetrahedronvolumelist = new REAL[m.tets.size()];
+  for (std::size_t t = 0; t < m.tets.size(); ++t) {
+    for (int k = 0; k < 4; ++k) in.tetrahedronlist[4 * t + k] = static_cast<int>(m.tets[t][k]);
+    in.tetrahedronvolumelist[t] = bound[t] > 0 ? bound[t] : -1.0;
   }
-  close(fd[0]);
-  int wstatus = 0;
-  while (waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
+  in.numberoftrifaces = static_cast<int>(m.surface_triangles.size());
+  in.trifacelist = new int[3 * m.surface_triangles.size()];
+  in.trifacemarkerlist = new int[m.surface_triangles.size()];
+  for (std::size_t f = 0; f < m.surface_triangles.size(); ++f) {
+    for (int k = 0; k < 3; ++k)
+      in.trifacelist[3 * f + k] = static_cast<int>(m.surface_triangles[f][k]);
+    in.trifacemarkerlist[f] = 1;
   }
-  if (WIFSIGNALED(wstatus) || !WIFEXITED(wstatus) || WEXITSTATUS(wstatus) != 0 || bytes.empty()) {
-    crash = WIFSIGNALED(wstatus)
-                ? std::string("an internal error, signal ") + std::to_string(WTERMSIG(wstatus))
-                : std::string("its process ended early");
-    return std::nullopt;
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "rzQaq%.3g/%.3g", o.max_radius_edge, o.min_dihedral_deg);
+  std::vector<char> switches(buf, buf + std::strlen(buf) + 1);
+  try {
+    ::tetrahedralize(switches.data(), &in, &out);
+  } catch (int code) {
+    throw InputError(std::string("TetGen could not refine the mesh: ") + tetgen_reason(code) +
+                     " (code " + std::to_string(code) + ")");
   }
-  if (bytes[0] == 1) throw InputError(std::string(bytes.begin() + 1, bytes.end()));
-  std::size_t at = 1;
-  uint64_t head[4];
-  read_into(bytes, at, head, sizeof head);
-  TetMesh m;
-  m.nodes.resize(head[0]);
-  m.tets.resize(head[1]);
-  m.surface_vertices = head[2];
-  m.surface_triangles.resize(head[3]);
-  read_into(bytes, at, m.nodes.data(), m.nodes.size() * sizeof(Vec3));
-  read_into(bytes, at, m.tets.data(), m.tets.size() * sizeof(m.tets[0]));
-  read_into(bytes, at, m.surface_triangles.data(),
-            m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
-  return m;
+  const std::size_t np = static_cast<std::size_t>(out.numberofpoints);
+  if (out.numberoftetrahedra <= 0 || np < m.nodes.size())
+    throw InputError("TetGen's refinement returned fewer points or no tetrahedra");
+  TetMesh r;
+  r.nodes.resize(np);
+  for (std::size_t v = 0; v < np; ++v)
+    r.nodes[v] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
+  for (std::size_t v = 0; v < m.nodes.size(); ++v)
+    if (r.nodes[v] != m.nodes[v])
+      throw InputError("TetGen's refinement moved node " + std::to_string(v));
+  r.surface_vertices = m.surface_vertices;
+  r.tets.resize(out.numberoftetrahedra);
+  for (int t = 0; t < out.numberoftetrahedra; ++t) {
+    auto& tet = r.tets[t];
+    for (int k = 0; k < 4; ++k) tet[k] = static_cast<uint32_t>(out.tetrahedronlist[4 * t + k]);
+    if (tet_volume(r, std::size_t(t)) < 0) std::swap(tet[2], tet[3]);
+  }
+  r.surface_triangles = boundary_faces(r);
+  return r;
 }
 
 }  // namespace
@@ -279,12 +266,22 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
   TetOptions tries = o;
   for (int attempt = 0;; ++attempt) {
     std::string crash;
-    if (auto m = tetgen_isolated(s, tries, crash)) return std::move(*m);
+    if (auto m = tetgen_isolated([&] { return run_tetgen(s, tries); }, crash)) return std::move(*m);
     if (attempt == 2 || tries.max_volume <= 0)
       throw InputError("TetGen failed on this surface (" + crash +
                        "); try another --max-tet-volume or --tolerance, or --repair");
     tries.max_volume *= 0.9;
   }
+}
+
+TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
+                    const TetOptions& o) {
+  if (max_volume.size() != mesh.tets.size())
+    throw InternalError("refine_tets: one volume bound per tetrahedron expected");
+  std::string crash;
+  if (auto m = tetgen_isolated([&] { return run_tetgen_refine(mesh, max_volume, o); }, crash))
+    return std::move(*m);
+  throw InputError("TetGen failed refining the mesh (" + crash + ")");
 }
 
 TetQuality tet_quality(const TetMesh& m) {

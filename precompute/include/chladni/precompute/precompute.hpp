@@ -33,6 +33,9 @@ struct PrecomputeOptions {
   /// (mode_error.hpp).
   double tolerance = 0.01;
   int max_passes = 4;  ///< meshes solved at most while refining
+  /// Refine where the estimate puts the error (TetGen refining the last mesh), or else the whole
+  /// mesh under one smaller bound (also the fallback when local refinement fails).
+  bool local_refinement = true;
   TetOptions tet;
   int threads = 0;
   std::size_t mode_cap = 2000;

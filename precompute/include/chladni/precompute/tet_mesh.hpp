@@ -16,7 +16,8 @@ struct TetMesh {
   /// nodes[0, surface_vertices) are the input surface's vertices in their order: TetGen runs with
   /// -Y (no Steiner points on the surface; without it TetGen 1.5 can abort on poor surfaces).
   std::size_t surface_vertices = 0;
-  /// The boundary triangles, outward, indexing nodes[0, surface_vertices): the input's.
+  /// The boundary triangles, outward: the input's, indexing nodes[0, surface_vertices), except
+  /// after refine_tets, which may split them.
   std::vector<std::array<uint32_t, 3>> surface_triangles;
 };
 
@@ -38,6 +39,14 @@ struct TetQuality {
 TetMesh tetrahedralize(const SurfaceMesh& surface, const TetOptions& options);
 
 TetQuality tet_quality(const TetMesh& mesh);
+
+/// Refines `mesh` where max_volume (one bound per tetrahedron; <= 0: none) asks, under
+/// `options`' quality bounds (its max_volume is not used). The nodes are kept, in order, and new
+/// ones appended; boundary faces may be split, so surface_triangles is the new boundary (it may
+/// index nodes past surface_vertices, which stays the input's). Throws InputError when TetGen
+/// fails.
+TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
+                    const TetOptions& options);
 
 /// Signed volume of tetrahedron `e` (positive for the orientation TetMesh keeps).
 inline double tet_volume(const TetMesh& m, std::size_t e) {

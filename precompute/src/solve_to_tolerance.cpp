@@ -1,0 +1,233 @@
+#include "solve_to_tolerance.hpp"
+
+#include <cmath>
+#include <numbers>
+#include <numeric>
+#include <optional>
+
+#include "chladni/core/error.hpp"
+#include "timing.hpp"
+
+namespace chladni::precompute {
+namespace {
+
+FemPass fem_pass(TetMesh tets, const PrecomputeOptions& o, const EigenOptions& eo,
+                 const Progress& p, Stopwatch& sw) {
+  FemPass f;
+  f.quality = tet_quality(tets);
+  sw.start("assemble");
+  const FemMesh fem = make_fem_mesh(tets, o.order);
+  f.tets = std::move(tets);
+  f.nodes = fem.nodes.size();
+  f.dofs = fem.dofs();
+  check_eigen_memory(fem, eo);  // refuse before assembly, the largest cost before the factor
+  FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
+  f.nonzeros = std::size_t(km.K.nonZeros());
+  sw.start("eigen-solve");
+  f.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
+  sw.start("error estimate");
+  f.errors = estimate_mode_errors(fem, o.material, f.eigen, o.threads);
+  return f;
+}
+
+// The modes the estimate must bring within tolerance: those asked for, in the band.
+double worst_error(const FemPass& f, const PrecomputeOptions& o) {
+  double worst = 0;
+  for (std::size_t i = 0; i < f.eigen.lambda.size(); ++i) {
+    const double hz = std::sqrt(std::max(f.eigen.lambda[i], 0.0)) / (2 * std::numbers::pi);
+    if (hz >= o.min_frequency && hz <= o.max_frequency)
+      worst = std::max(worst, f.errors.relative[i]);
+  }
+  return worst;
+}
+
+// How much the next mesh's edges shrink where the worst mode's error lies: an element of order
+// p shrunk by s keeps about s^(2p) of its error (energy error ~ h^p; Zienkiewicz & Zhu 1987),
+// so the factor that brings that mode to half the tolerance, by at most 2 at a time. `step` in
+// (0, 1] takes that fraction of the step in log size (a milder step when the full one does not
+// fit the memory budget).
+double shrink_factor(double worst, double step, const PrecomputeOptions& o) {
+  const double s = std::clamp(std::pow(0.5 * o.tolerance / worst, 1.0 / (2.0 * o.order)), 0.5, 0.9);
+  return std::pow(s, step);
+}
+
+// Uniform refinement: the largest tet volume for the next mesh, from the error-weighted mean
+// edge shrunk by `s`.
+double refined_volume(const FemPass& f, double s) {
+  const TetMesh& m = f.tets;
+  double weighted = 0, weight = 0;
+  for (std::size_t e = 0; e < m.tets.size(); ++e) {
+    const double v = std::abs(tet_volume(m, e));
+    weighted += f.errors.element[e] * std::cbrt(6 * std::numbers::sqrt2 * v);  // regular edge
+    weight += f.errors.element[e];
+  }
+  return std::pow(s * weighted / weight, 3) / (6 * std::numbers::sqrt2);
+}
+
+// Local refinement by Doerfler marking (Doerfler 1996): the tetrahedra of densest estimated
+// error, together holding the share theta of it that brings the worst mode to half the tolerance
+// once their edges shrink by s (capped at 0.9, so a few sweeps rather than one near-uniform one
+// reach a concentrated error), get the bound s^3 times their volume; the rest get none.
+std::vector<double> local_bounds(const FemPass& f, double worst, double s,
+                                 const PrecomputeOptions& o) {
+  const TetMesh& m = f.tets;
+  const std::vector<double>& err = f.errors.element;
+  const std::size_t n = m.tets.size();
+  std::vector<double> volume(n);
+  for (std::size_t e = 0; e < n; ++e) volume[e] = std::abs(tet_volume(m, e));
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    return err[a] * volume[b] > err[b] * volume[a];  // error density, densest first
+  });
+  const double total = std::accumulate(err.begin(), err.end(), 0.0);
+  const double gain = 1 - std::pow(s, 2.0 * o.order);
+  const double theta = std::clamp((worst - 0.5 * o.tolerance) / (worst * gain), 0.0, 0.9);
+  std::vector<double> bound(n, -1.0);
+  double marked = 0;
+  for (std::size_t e : order) {
+    if (marked >= theta * total) break;
+    bound[e] = s * s * s * volume[e];
+    marked += err[e];
+  }
+  return bound;
+}
+
+double largest_tet(const TetMesh& m) {
+  double v = 0;
+  for (std::size_t e = 0; e < m.tets.size(); ++e) v = std::max(v, std::abs(tet_volume(m, e)));
+  return v;
+}
+
+// The next mesh, refined by `s` where the error lies: locally (TetGen refining `best`'s mesh)
+// unless o.local_refinement is off or that fails, else the surface meshed again under one
+// smaller bound. `meshed` receives the bound (after local refinement, the largest tetrahedron).
+// Returns false, with the reason in r, when no mesh can be made.
+bool next_mesh(const SurfaceMesh& surface, const FemPass& best, double worst, double s,
+               const PrecomputeOptions& o, const Progress& p, TetOptions& topt, TetMesh& tets,
+               double& meshed, PrecomputeReport& r) {
+  if (o.local_refinement) {
+    try {
+      tets = refine_tets(best.tets, local_bounds(best, worst, s, o), topt);
+      meshed = largest_tet(tets);
+      return true;
+    } catch (const InputError& e) {
+      if (p.note) p.note(std::string("local refinement failed (") + e.what() + "); refining all");
+    }
+  }
+  topt.max_volume = std::min(r.max_tet_volume, refined_volume(best, s));  // never coarser
+  meshed = topt.max_volume;
+  try {
+    tets = tetrahedralize(surface, topt);
+    return true;
+  } catch (const InputError& e) {  // e.g. more tets than this tool meshes
+    r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
+    return false;
+  }
+}
+
+std::string percent(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2g %%", 100 * x);
+  return buf;
+}
+
+// Weyl's law for an elastic solid: N(omega) ~ V omega^3 / (6 pi^2) (1/c_p^3 + 2/c_s^3), the
+// number of modes below max_frequency, from the volume alone.
+double weyl_modes(double volume, const PrecomputeOptions& o) {
+  const double w = 2 * std::numbers::pi * o.max_frequency;
+  const double cs = o.material.shear_speed();
+  const double cp =
+      cs * std::sqrt((o.material.lame_lambda() + 2 * o.material.lame_mu()) / o.material.lame_mu());
+  return volume * w * w * w / (6 * std::numbers::pi * std::numbers::pi) *
+         (1 / (cp * cp * cp) + 2 / (cs * cs * cs));
+}
+
+}  // namespace
+
+FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& o,
+                           const EigenOptions& eo, const Progress& p, Stopwatch& sw,
+                           PrecomputeReport& r, SurfaceMesh& first) {
+  const bool chosen = o.max_tet_volume > 0;
+  double volume = o.max_tet_volume;
+  if (!chosen)
+    volume = o.max_modes > 0 ? coarse_max_volume(surface)
+                             : auto_max_volume(o.material, o.max_frequency, o.order, surface);
+  double meshed = volume;  // the bound `tets` was made with
+  TetOptions topt = o.tet;
+  topt.max_volume = volume;
+  sw.start("tetrahedralize");
+  TetMesh tets = tetrahedralize(surface, topt);
+  first.vertices.assign(tets.nodes.begin(),
+                        tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
+  first.triangles = tets.surface_triangles;
+  std::optional<FemPass> best;
+  double worst = 0, step = 1;
+  for (int pass = 1;; ++pass) {
+    const auto t0 = std::chrono::steady_clock::now();
+    FemPass f;
+    try {
+      f = fem_pass(std::move(tets), o, eo, p, sw);
+    } catch (const InputError& e) {
+      // A refinement over the memory budget is retried at half the step in log size (a factor
+      // of 8 in volume becomes 2.8, then 1.7): a thin part may need only a little more. Any
+      // other failure (a degenerate tetrahedron from TetGen) leaves the previous mesh standing.
+      if (best && dynamic_cast<const BudgetError*>(&e) && step > 0.3) {
+        if (p.note)
+          p.note("mesh " + std::to_string(pass) + " would exceed --max-memory; trying a smaller " +
+                 "refinement step");
+        step /= 2;
+        sw.start("tetrahedralize");
+        if (!next_mesh(surface, *best, worst, shrink_factor(worst, step, o), o, p, topt, tets,
+                       meshed, r))
+          break;
+        --pass;
+        continue;
+      }
+      if (best) {
+        r.converged = false;
+        r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
+        break;
+      }
+      // The first mesh does not fit. A coarser one would resolve neither the band nor the
+      // modes in it, and searching for them all is the work to avoid: refuse now, saying how
+      // many modes the band holds.
+      if (!dynamic_cast<const BudgetError*>(&e) || o.max_modes > 0) throw;
+      throw BudgetError(std::string(e.what()) + "; about " +
+                        std::to_string(std::llround(weyl_modes(std::abs(r.mesh.volume), o))) +
+                        " modes lie below " + std::to_string(int(o.max_frequency)) +
+                        " Hz: ask for the first N with --max-modes");
+    }
+    worst = worst_error(f, o);
+    r.passes.push_back({f.tets.tets.size(), f.dofs, worst, seconds_since(t0), meshed});
+    if (p.note)
+      p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
+             " tetrahedra, largest estimated frequency error " + percent(worst));
+    best = std::move(f);
+    r.max_tet_volume = meshed;
+    step = 1;
+    if (worst <= o.tolerance) {
+      r.converged = true;
+      break;
+    }
+    r.converged = false;
+    if (chosen) {
+      r.unconverged_reason = "--max-tet-volume fixes the elements";
+      break;
+    }
+    if (pass >= o.max_passes) {
+      r.unconverged_reason = std::to_string(pass) + " meshes solved";
+      break;
+    }
+    sw.start("tetrahedralize");
+    if (!next_mesh(surface, *best, worst, shrink_factor(worst, 1, o), o, p, topt, tets, meshed, r))
+      break;
+  }
+  if (!r.converged && p.note)
+    p.note("warning: the largest estimated frequency error is " +
+           percent(r.passes.back().worst_error) + ", above --tolerance " + percent(o.tolerance) +
+           " (" + r.unconverged_reason + ")");
+  return std::move(*best);
+}
+
+}  // namespace chladni::precompute

@@ -1,0 +1,109 @@
+// TetGen in a child process: TetGen 1.5 aborts on failed internal assertions, which must end
+// as an error to report, not as the end of the caller.
+#include "tetgen_child.hpp"
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+
+#include "chladni/core/error.hpp"
+
+namespace chladni::precompute {
+namespace {
+
+void append(std::vector<char>& out, const void* p, std::size_t n) {
+  const char* c = static_cast<const char*>(p);
+  out.insert(out.end(), c, c + n);
+}
+
+void read_into(const std::vector<char>& in, std::size_t& at, void* p, std::size_t n) {
+  if (in.size() - at < n) throw InternalError("TetGen's child process sent a short mesh");
+  std::memcpy(p, in.data() + at, n);
+  at += n;
+}
+
+bool write_all(int fd, const char* p, std::size_t n) {
+  while (n > 0) {
+    const ssize_t w = write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w, n -= std::size_t(w);
+  }
+  return true;
+}
+
+}  // namespace
+
+std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std::string& crash) {
+  int fd[2];
+  if (pipe(fd) != 0) return job();  // no isolation to be had: run in-process
+  const pid_t pid = fork();
+  if (pid < 0) {
+    close(fd[0]), close(fd[1]);
+    return job();
+  }
+  if (pid == 0) {
+    close(fd[0]);
+    if (std::getenv("CHLADNI_TEST_TETGEN_ABORT")) std::abort();  // tests: TetGen's assertion
+    std::string msg;
+    std::vector<char> bytes;
+    char status = 0;
+    try {
+      const TetMesh m = job();
+      const uint64_t head[4] = {m.nodes.size(), m.tets.size(), m.surface_vertices,
+                                m.surface_triangles.size()};
+      append(bytes, head, sizeof head);
+      append(bytes, m.nodes.data(), m.nodes.size() * sizeof(Vec3));
+      append(bytes, m.tets.data(), m.tets.size() * sizeof(m.tets[0]));
+      append(bytes, m.surface_triangles.data(),
+             m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
+    } catch (const std::exception& e) {
+      status = 1;
+      msg = e.what();
+      bytes.assign(msg.begin(), msg.end());
+    }
+    const bool ok = write_all(fd[1], &status, 1) && write_all(fd[1], bytes.data(), bytes.size());
+    close(fd[1]);
+    _exit(ok ? 0 : 1);
+  }
+  close(fd[1]);
+  std::vector<char> bytes;
+  char buf[1 << 16];
+  for (;;) {
+    const ssize_t n = read(fd[0], buf, sizeof buf);
+    if (n > 0)
+      bytes.insert(bytes.end(), buf, buf + n);
+    else if (n == 0 || errno != EINTR)
+      break;
+  }
+  close(fd[0]);
+  int wstatus = 0;
+  while (waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(wstatus) || !WIFEXITED(wstatus) || WEXITSTATUS(wstatus) != 0 || bytes.empty()) {
+    crash = WIFSIGNALED(wstatus)
+                ? std::string("an internal error, signal ") + std::to_string(WTERMSIG(wstatus))
+                : std::string("its process ended early");
+    return std::nullopt;
+  }
+  if (bytes[0] == 1) throw InputError(std::string(bytes.begin() + 1, bytes.end()));
+  std::size_t at = 1;
+  uint64_t head[4];
+  read_into(bytes, at, head, sizeof head);
+  TetMesh m;
+  m.nodes.resize(head[0]);
+  m.tets.resize(head[1]);
+  m.surface_vertices = head[2];
+  m.surface_triangles.resize(head[3]);
+  read_into(bytes, at, m.nodes.data(), m.nodes.size() * sizeof(Vec3));
+  read_into(bytes, at, m.tets.data(), m.tets.size() * sizeof(m.tets[0]));
+  read_into(bytes, at, m.surface_triangles.data(),
+            m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
+  return m;
+}
+
+}  // namespace chladni::precompute
