@@ -96,13 +96,18 @@ double enclosed_volume(const SurfaceMesh& s) {
   return std::abs(v);
 }
 
+// Zero-based input points; tetgenio frees them.
+void set_points(tetgenio& in, const std::vector<Vec3>& points) {
+  in.firstnumber = 0;
+  in.numberofpoints = static_cast<int>(points.size());
+  in.pointlist = new REAL[3 * points.size()];
+  for (std::size_t v = 0; v < points.size(); ++v)
+    for (int k = 0; k < 3; ++k) in.pointlist[3 * v + k] = points[v][k];
+}
+
 TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   tetgenio in, out;
-  in.firstnumber = 0;
-  in.numberofpoints = static_cast<int>(s.vertices.size());
-  in.pointlist = new REAL[3 * s.vertices.size()];
-  for (std::size_t v = 0; v < s.vertices.size(); ++v)
-    for (int k = 0; k < 3; ++k) in.pointlist[3 * v + k] = s.vertices[v][k];
+  set_points(in, s.vertices);
   in.numberoffacets = static_cast<int>(s.triangles.size());
   in.facetlist = new tetgenio::facet[s.triangles.size()];
   in.facetmarkerlist = nullptr;
@@ -190,11 +195,7 @@ std::vector<std::array<uint32_t, 3>> boundary_faces(const TetMesh& m) {
 // boundary faces may be split, so a thin wall gets interior points near it.
 TetMesh run_tetgen_refine(const TetMesh& m, const std::vector<double>& bound, const TetOptions& o) {
   tetgenio in, out;
-  in.firstnumber = 0;
-  in.numberofpoints = static_cast<int>(m.nodes.size());
-  in.pointlist = new REAL[3 * m.nodes.size()];
-  for (std::size_t v = 0; v < m.nodes.size(); ++v)
-    for (int k = 0; k < 3; ++k) in.pointlist[3 * v + k] = m.nodes[v][k];
+  set_points(in, m.nodes);
   in.numberoftetrahedra = static_cast<int>(m.tets.size());
   in.numberofcorners = 4;
   in.tetrahedronlist = new int[4 * m.tets.size()];
