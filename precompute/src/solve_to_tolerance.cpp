@@ -67,8 +67,12 @@ double refined_volume(const FemPass& f, double s) {
 // Local refinement by Doerfler marking (Doerfler 1996): the tetrahedra of densest estimated
 // error, together holding the share theta of it that brings the worst mode to half the tolerance
 // once their edges shrink by s (capped at 0.9, so a few sweeps rather than one near-uniform one
-// reach a concentrated error), get the bound s^3 times their volume; the rest get none.
-std::vector<double> local_bounds(const FemPass& f, double worst, double s,
+// reach a concentrated error), get s^3 times the bound they were meshed under: `level` (the
+// last bound of the region), or twice their volume where they are smaller (a thin wall). A
+// quality mesh's tetrahedra average 0.7 of their bound, so a bound of s^3 times each one's own
+// volume would follow its smallest neighbours (21x the tetrahedra for s = 1/2 on a box, against
+// 13x this way and 10x for uniform refinement). The rest get none.
+std::vector<double> local_bounds(const FemPass& f, double worst, double s, double level,
                                  const PrecomputeOptions& o) {
   const TetMesh& m = f.tets;
   const std::vector<double>& err = f.errors.element;
@@ -87,29 +91,25 @@ std::vector<double> local_bounds(const FemPass& f, double worst, double s,
   double marked = 0;
   for (std::size_t e : order) {
     if (marked >= theta * total) break;
-    bound[e] = s * s * s * volume[e];
+    bound[e] = s * s * s * std::min(level, 2 * volume[e]);
     marked += err[e];
   }
   return bound;
 }
 
-double largest_tet(const TetMesh& m) {
-  double v = 0;
-  for (std::size_t e = 0; e < m.tets.size(); ++e) v = std::max(v, std::abs(tet_volume(m, e)));
-  return v;
-}
-
 // The next mesh, refined by `s` where the error lies: locally (TetGen refining `best`'s mesh)
 // unless o.local_refinement is off or that fails, else the surface meshed again under one
-// smaller bound. `meshed` receives the bound (after local refinement, the largest tetrahedron).
-// Returns false, with the reason in r, when no mesh can be made.
+// smaller bound. r.max_tet_volume is `best`'s bound (after local refinement, its finest
+// region's); `meshed` receives the new one. Returns false, with the reason in r, when no mesh
+// can be made.
 bool next_mesh(const SurfaceMesh& surface, const FemPass& best, double worst, double s,
                const PrecomputeOptions& o, const Progress& p, TetOptions& topt, TetMesh& tets,
                double& meshed, PrecomputeReport& r) {
   if (o.local_refinement) {
     try {
-      tets = refine_tets(best.tets, local_bounds(best, worst, s, o), topt);
-      meshed = largest_tet(tets);
+      const double level = s * s * s * r.max_tet_volume;
+      tets = refine_tets(best.tets, local_bounds(best, worst, s, r.max_tet_volume, o), topt);
+      meshed = level;
       return true;
     } catch (const InputError& e) {
       if (p.note) p.note(std::string("local refinement failed (") + e.what() + "); refining all");

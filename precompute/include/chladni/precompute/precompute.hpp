@@ -67,7 +67,7 @@ struct PrecomputeReport {
     std::size_t tets = 0, dofs = 0;
     double worst_error = 0;
     double seconds = 0;
-    double max_tet_volume = 0;  ///< the bound TetGen meshed it with
+    double max_tet_volume = 0;  ///< its bound (refined locally: its finest region's)
   };
   std::vector<MeshPass> passes;
   bool converged = true;           ///< every mode asked for is within PrecomputeOptions::tolerance
