@@ -22,14 +22,14 @@ cmake --build build/asan -j "$jobs"
 # Lavapipe leaks a little per VkInstance and is dlclose'd before LeakSanitizer reports, which
 # leaves the leak unattributable; preloading it (after libasan, which must come first) keeps it
 # mapped so tests/lsan.supp can name it. Leak checking stays on for everything of ours.
-# Seven accuracy tests that take 60-190 s each under the sanitizers run in the release stage
+# Eight accuracy tests that take 60-190 s each under the sanitizers run in the release stage
 # only: their code (FEM, both Lanczos solvers, the error estimate, local and uniform refinement,
 # BEM with GMRES, radiate) runs under the sanitizers in smaller tests too, and keeping them here
 # would push CI past its 45 minutes.
 heavy='^(ModalFem\.(SteelBarMatchesTimoshenkoWithinOnePercent|BlockLanczosAndSpectraAgree|'
 heavy+='MaxModesMeshesForTheModesAskedFor)|CliRadiate\.SphereHarmonicMatchesTheExactSolution|'
 heavy+='ModeError\.(BracketsTheBarsErrorAndRefinementMeetsTheTolerance|'
-heavy+='LocalRefinementMeetsTheToleranceOnAThinFin)|'
+heavy+='LocalRefinementMeetsTheToleranceOnAThinFin|RefinementOverTheBudgetTakesASmallerStep)|'
 heavy+='BemAssets\.BowlLowestModesByBemAndAudibleAtTheirPredictedLevel)$'
 preload=""
 lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -n 1 || true)
