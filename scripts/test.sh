@@ -24,8 +24,9 @@ cmake --build build/asan -j "$jobs"
 # mapped so tests/lsan.supp can name it. Leak checking stays on for everything of ours.
 # Eight accuracy tests that take 60-190 s each under the sanitizers run in the release stage
 # only: their code (FEM, both Lanczos solvers, the error estimate, local and uniform refinement,
-# BEM with GMRES, radiate) runs under the sanitizers in smaller tests too, and keeping them here
-# would push CI past its 45 minutes.
+# BEM with GMRES, radiate) runs under the sanitizers in smaller tests too (all but the retry of a
+# refinement step over the memory budget, plain control flow), and keeping them here would push
+# CI past its 45 minutes.
 heavy='^(ModalFem\.(SteelBarMatchesTimoshenkoWithinOnePercent|BlockLanczosAndSpectraAgree|'
 heavy+='MaxModesMeshesForTheModesAskedFor)|CliRadiate\.SphereHarmonicMatchesTheExactSolution|'
 heavy+='ModeError\.(BracketsTheBarsErrorAndRefinementMeetsTheTolerance|'
