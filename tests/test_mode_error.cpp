@@ -302,6 +302,7 @@ TEST(ModeError, TetGenAbortIsAnErrorNotACrash) {
   TetOptions t;
   t.max_volume = 1e-5;
   const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {2, 1, 1});
+  const TetMesh coarse = tetrahedralize(box, t);
   ASSERT_EQ(setenv("CHLADNI_TEST_TETGEN_ABORT", "1", 1), 0);
   try {
     tetrahedralize(box, t);
@@ -312,6 +313,16 @@ TEST(ModeError, TetGenAbortIsAnErrorNotACrash) {
         std::string::npos)
         << e.what();
   }
+  const std::vector<double> bounds(coarse.tets.size(), 1e-6);
+  try {
+    refine_tets(coarse, bounds, t);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("TetGen failed refining the mesh (an internal error"),
+              std::string::npos)
+        << e.what();
+  }
   unsetenv("CHLADNI_TEST_TETGEN_ABORT");
   EXPECT_GT(tetrahedralize(box, t).tets.size(), 100u);
+  EXPECT_GT(refine_tets(coarse, bounds, t).tets.size(), coarse.tets.size());
 }

@@ -279,10 +279,16 @@ TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
                     const TetOptions& o) {
   if (max_volume.size() != mesh.tets.size())
     throw InternalError("refine_tets: one volume bound per tetrahedron expected");
-  std::string crash;
-  if (auto m = tetgen_isolated([&] { return run_tetgen_refine(mesh, max_volume, o); }, crash))
-    return std::move(*m);
-  throw InputError("TetGen failed refining the mesh (" + crash + ")");
+  // As for meshing: an assertion TetGen fails at some bounds is usually passed at slightly
+  // smaller ones.
+  std::vector<double> bounds = max_volume;
+  for (int attempt = 0;; ++attempt) {
+    std::string crash;
+    if (auto m = tetgen_isolated([&] { return run_tetgen_refine(mesh, bounds, o); }, crash))
+      return std::move(*m);
+    if (attempt == 2) throw InputError("TetGen failed refining the mesh (" + crash + ")");
+    for (double& b : bounds) b *= 0.9;
+  }
 }
 
 TetQuality tet_quality(const TetMesh& m) {
