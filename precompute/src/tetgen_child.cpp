@@ -2,6 +2,7 @@
 // as an error to report, not as the end of the caller.
 #include "tetgen_child.hpp"
 
+#include <fcntl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -48,6 +49,12 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
   }
   if (pid == 0) {
     close(fd[0]);
+    // TetGen's failed assertions print its source line to stderr before the abort the parent
+    // reports (and retries); the user sees the report, not the raw line, unless asked for.
+    if (!std::getenv("CHLADNI_TETGEN_STDERR")) {
+      const int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+      if (null >= 0) dup2(null, STDERR_FILENO), close(null);
+    }
     if (std::getenv("CHLADNI_TEST_TETGEN_ABORT")) std::abort();  // tests: TetGen's assertion
     std::string msg;
     std::vector<char> bytes;
