@@ -71,8 +71,7 @@ double refined_volume(const FemPass& f, double s) {
 // last bound of the region), or twice their volume where they are smaller (a thin wall). A
 // quality mesh's tetrahedra average 0.7 of their bound, so a bound of s^3 times each one's own
 // volume would follow its smallest neighbours (21x the tetrahedra for s = 1/2 on a box, against
-// 13x this way and 10x for uniform refinement). The rest get none. Empty when the marked
-// tetrahedra fill over half the solid.
+// 13x this way and 10x for uniform refinement). The rest get none.
 std::vector<double> local_bounds(const FemPass& f, double worst, double s, double level,
                                  const PrecomputeOptions& o) {
   const TetMesh& m = f.tets;
@@ -89,34 +88,28 @@ std::vector<double> local_bounds(const FemPass& f, double worst, double s, doubl
   const double gain = 1 - std::pow(s, 2.0 * o.order);
   const double theta = std::clamp((worst - 0.5 * o.tolerance) / (worst * gain), 0.0, 0.9);
   std::vector<double> bound(n, -1.0);
-  double marked = 0, marked_volume = 0;
+  double marked = 0;
   for (std::size_t e : order) {
     if (marked >= theta * total) break;
     bound[e] = s * s * s * std::min(level, 2 * volume[e]);
-    marked += err[e], marked_volume += volume[e];
+    marked += err[e];
   }
-  // An error spread over most of the solid is met sooner and with better elements by meshing
-  // it all again (a linear cube: 308k tetrahedra in four local sweeps, 91k in three uniform).
-  const double solid = std::accumulate(volume.begin(), volume.end(), 0.0);
-  if (marked_volume > 0.5 * solid) return {};
   return bound;
 }
 
 // The next mesh, refined by `s` where the error lies: locally (TetGen refining `best`'s mesh)
-// unless o.local_refinement is off, the error fills most of the solid or TetGen fails, else
-// the surface meshed again under one smaller bound. r.max_tet_volume is `best`'s bound (after local
-// refinement, its finest region's); `meshed` receives the new one. Returns false, with the reason
-// in r, when no mesh can be made.
+// unless o.local_refinement is off or that fails, else the surface meshed again under one
+// smaller bound. r.max_tet_volume is `best`'s bound (after local refinement, its finest
+// region's); `meshed` receives the new one. Returns false, with the reason in r, when no mesh
+// can be made.
 bool next_mesh(const SurfaceMesh& surface, const FemPass& best, double worst, double s,
                const PrecomputeOptions& o, const Progress& p, TetOptions& topt, TetMesh& tets,
                double& meshed, PrecomputeReport& r) {
-  const std::vector<double> bounds = o.local_refinement
-                                         ? local_bounds(best, worst, s, r.max_tet_volume, o)
-                                         : std::vector<double>{};
-  if (!bounds.empty()) {
+  if (o.local_refinement) {
     try {
-      tets = refine_tets(best.tets, bounds, topt);
-      meshed = s * s * s * r.max_tet_volume;
+      const double level = s * s * s * r.max_tet_volume;
+      tets = refine_tets(best.tets, local_bounds(best, worst, s, r.max_tet_volume, o), topt);
+      meshed = level;
       return true;
     } catch (const InputError& e) {
       if (p.note) p.note(std::string("local refinement failed (") + e.what() + "); refining all");
