@@ -2,10 +2,8 @@
 #include <tetgen.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <numbers>
@@ -105,6 +103,21 @@ void set_points(tetgenio& in, const std::vector<Vec3>& points) {
     for (int k = 0; k < 3; ++k) in.pointlist[3 * v + k] = points[v][k];
 }
 
+// TetGen's points and tetrahedra, each tetrahedron positively oriented.
+TetMesh mesh_from_output(const tetgenio& out) {
+  TetMesh m;
+  m.nodes.resize(static_cast<std::size_t>(out.numberofpoints));
+  for (std::size_t v = 0; v < m.nodes.size(); ++v)
+    m.nodes[v] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
+  m.tets.resize(static_cast<std::size_t>(out.numberoftetrahedra));
+  for (std::size_t t = 0; t < m.tets.size(); ++t) {
+    auto& tet = m.tets[t];
+    for (int k = 0; k < 4; ++k) tet[k] = static_cast<uint32_t>(out.tetrahedronlist[4 * t + k]);
+    if (tet_volume(m, t) < 0) std::swap(tet[2], tet[3]);
+  }
+  return m;
+}
+
 TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   tetgenio in, out;
   set_points(in, s.vertices);
@@ -151,18 +164,9 @@ TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   }
   // With -Y TetGen keeps the input points first, in order, and adds none on the surface: the
   // input triangles are the mesh's boundary (tests check this).
-  TetMesh m;
-  m.nodes.resize(np);
-  for (std::size_t v = 0; v < np; ++v)
-    m.nodes[v] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
+  TetMesh m = mesh_from_output(out);
   m.surface_vertices = s.vertices.size();
   m.surface_triangles = s.triangles;
-  m.tets.resize(out.numberoftetrahedra);
-  for (int t = 0; t < out.numberoftetrahedra; ++t) {
-    auto& tet = m.tets[t];
-    for (int k = 0; k < 4; ++k) tet[k] = static_cast<uint32_t>(out.tetrahedronlist[4 * t + k]);
-    if (tet_volume(m, std::size_t(t)) < 0) std::swap(tet[2], tet[3]);
-  }
   return m;
 }
 
@@ -224,20 +228,11 @@ TetMesh run_tetgen_refine(const TetMesh& m, const std::vector<double>& bound, co
   const std::size_t np = static_cast<std::size_t>(out.numberofpoints);
   if (out.numberoftetrahedra <= 0 || np < m.nodes.size())
     throw InputError("TetGen's refinement returned fewer points or no tetrahedra");
-  TetMesh r;
-  r.nodes.resize(np);
-  for (std::size_t v = 0; v < np; ++v)
-    r.nodes[v] = {out.pointlist[3 * v], out.pointlist[3 * v + 1], out.pointlist[3 * v + 2]};
+  TetMesh r = mesh_from_output(out);
   for (std::size_t v = 0; v < m.nodes.size(); ++v)
     if (r.nodes[v] != m.nodes[v])
       throw InputError("TetGen's refinement moved node " + std::to_string(v));
   r.surface_vertices = m.surface_vertices;
-  r.tets.resize(out.numberoftetrahedra);
-  for (int t = 0; t < out.numberoftetrahedra; ++t) {
-    auto& tet = r.tets[t];
-    for (int k = 0; k < 4; ++k) tet[k] = static_cast<uint32_t>(out.tetrahedronlist[4 * t + k]);
-    if (tet_volume(r, std::size_t(t)) < 0) std::swap(tet[2], tet[3]);
-  }
   r.surface_triangles = boundary_faces(r);
   return r;
 }
