@@ -59,17 +59,20 @@ TEST(Synth, RenderAndExciteDoNotAllocate) {
   std::vector<std::complex<float>> amp(modes.size(), {1.0f, 0.5f});
   std::vector<float> out(256 * 2);
   synth.excite(v, amp, 3);  // warm-up: first use of every path
+  synth.strike(v, amp, 3.5, 0.001);
   synth.render(256, out.data());
   g_allocs = 0;
   g_count = true;
   for (int b = 0; b < 200; ++b) {
     if (b % 20 == 0) synth.excite(v, amp, static_cast<uint32_t>(b % 256));  // steals too
+    if (b % 20 == 10) synth.strike(v, amp, 17.5, 0.002);  // a contact over two renders
     synth.set_pan(v, 0.3f, 0.9f);
     synth.render(256, out.data());
   }
   g_count = false;
   EXPECT_EQ(g_allocs.load(), 0);
   EXPECT_GT(synth.stats().stolen, 0u);
+  EXPECT_EQ(synth.stats().contacts_undriven, 0u);
 }
 
 TEST(ShakerBank, ShakeRenderAndSharedSynthDoNotAllocate) {

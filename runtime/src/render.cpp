@@ -8,7 +8,6 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/runtime/gpu_filterbank.hpp"
-#include "chladni/runtime/impact.hpp"
 #include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/thread_pool.hpp"
 #include "chladni/runtime/transfer_gains.hpp"
@@ -96,8 +95,8 @@ ObjectModes object_modes(const std::vector<InlineMode>& modes) {
   return o;
 }
 
-void impact_amplitudes(const ObjectModes& object, const ImpactEvent& ev, double delay,
-                       std::vector<std::complex<float>>& out) {
+void impact_coupling(const ObjectModes& object, const ImpactEvent& ev,
+                     std::vector<std::complex<float>>& out) {
   out.resize(object.modes.size());
   std::size_t point = 0;
   if (object.model && object.model->has_geometry()) {
@@ -114,10 +113,7 @@ void impact_amplitudes(const ObjectModes& object, const ImpactEvent& ev, double 
   }
   for (std::size_t i = 0; i < object.modes.size(); ++i) {
     const ModeSpec& m = object.modes[i];
-    const std::complex<double> lambda(-m.decay, m.omega_d);
-    // Advance the kick from contact start to the sample where it is applied.
-    std::complex<double> w =
-        contact_weight(ev.impulse, ev.contact_time, m.omega_d, m.decay) * std::exp(lambda * delay);
+    double w = ev.impulse;
     if (object.inline_modes) {
       w *= (*object.inline_modes)[i].amplitude;
     } else if (object.model) {
@@ -126,7 +122,7 @@ void impact_amplitudes(const ObjectModes& object, const ImpactEvent& ev, double 
           object.model->has_geometry() ? dot(object.model->shape(i, point), ev.direction) : 1.0;
       w *= m.omega_d > 0 ? vn / m.omega_d : 0.0;
     }
-    out[i] = std::complex<float>(static_cast<float>(w.real()), static_cast<float>(w.imag()));
+    out[i] = std::complex<float>(static_cast<float>(w), 0.0f);
   }
 }
 
@@ -321,8 +317,8 @@ AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& obj
         if (at > t) frames = static_cast<uint32_t>(at - t);  // render up to it, then excite
         break;
       }
-      impact_amplitudes(obj, ev, static_cast<double>(at) / fs - ev.time, amps);
-      synth.excite(voices[ev.object], amps, static_cast<uint32_t>(at - t));
+      impact_coupling(obj, ev, amps);
+      synth.strike(voices[ev.object], amps, ev.time * fs - static_cast<double>(t), ev.contact_time);
       ++next;
     }
     DriveInput drive;

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "chladni/core/error.hpp"
+#include "chladni/runtime/impact.hpp"
 
 namespace chladni::runtime {
 namespace {
@@ -15,7 +16,10 @@ constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
 }  // namespace
 
 Synth::Synth(Filterbank& fb, const SynthOptions& o)
-    : fb_(fb), opt_(o), threshold_(std::pow(10.0, o.retire_db / 20.0)) {
+    : fb_(fb),
+      opt_(o),
+      threshold_(std::pow(10.0, o.retire_db / 20.0)),
+      forces_(o.sample_rate, o.max_contact_modes, o.max_contacts) {
   if (!(o.sample_rate > 0) || !std::isfinite(o.sample_rate)) {
     throw InputError("sample rate must be a positive number");
   }
@@ -63,6 +67,10 @@ Synth::VoiceId Synth::start_voice(std::span<const ModeSpec> modes) {
       voice.alive = true;
       voice.modes.assign(modes.begin(), modes.end());
       voice.slot.assign(modes.size(), -1);
+      if (kicked_.size() < modes.size()) {
+        kicked_.resize(modes.size());
+        strike_amp_.resize(modes.size());
+      }
       voice.pan[0] = voice.pan[1] = 1.0f;
       return static_cast<VoiceId>(v);
     }
@@ -159,6 +167,11 @@ void Synth::excite(VoiceId id, std::span<const std::complex<float>> amp, uint32_
   Voice& v = voice(id);
   if (amp.size() != v.modes.size()) throw std::invalid_argument("excite: wrong amplitude count");
   if (offset >= fb_.max_frames()) throw std::invalid_argument("excite: offset beyond one render");
+  kick(v, id, amp, offset);
+}
+
+void Synth::kick(Voice& v, VoiceId id, std::span<const std::complex<float>> amp, uint32_t offset) {
+  std::fill(kicked_.begin(), kicked_.begin() + amp.size(), uint8_t{0});
   // Modes whose kick is below the retire threshold of the strongest one would retire at once.
   double strongest = 0;
   uint32_t new_slots = 0;
@@ -213,7 +226,53 @@ void Synth::excite(VoiceId id, std::span<const std::complex<float>> amp, uint32_
         rate_[s] > 0 ? t + static_cast<int64_t>(std::ceil(std::log(ratio) / rate_[s])) : kNever;
     pending_[pending_count_++] =
         Excitation{static_cast<uint32_t>(s), offset, amp[i].real(), amp[i].imag()};
+    kicked_[i] = 1;
   }
+}
+
+void Synth::strike(VoiceId id, std::span<const std::complex<float>> coupling, double start,
+                   double contact) {
+  Voice& v = voice(id);
+  if (coupling.size() != v.modes.size()) throw std::invalid_argument("strike: wrong mode count");
+  if (!(start > -1.0) || !(std::ceil(start) < fb_.max_frames()))
+    throw std::invalid_argument("strike: start beyond one render");
+  if (!std::isfinite(contact) || contact < 0) throw InputError("contact time must be >= 0");
+  const uint32_t offset = static_cast<uint32_t>(std::ceil(start));
+  const double delay = (offset - start) / opt_.sample_rate;  // contact start -> first sample
+  for (std::size_t i = 0; i < coupling.size(); ++i) {
+    const ModeSpec& m = v.modes[i];
+    const std::complex<double> lambda(-m.decay, m.omega_d);
+    const std::complex<double> w = std::complex<double>(coupling[i]) *
+                                   contact_weight(1.0, contact, m.omega_d, m.decay) *
+                                   std::exp(lambda * delay);
+    strike_amp_[i] = {static_cast<float>(w.real()), static_cast<float>(w.imag())};
+  }
+  const std::span amp(strike_amp_.data(), coupling.size());
+  kick(v, id, amp, offset);
+  const double t0 = static_cast<double>(now_) + start;
+  if (ContactForces::end_sample(t0, contact, opt_.sample_rate) <=
+      static_cast<int64_t>(now_ + offset))
+    return;  // no sample inside the contact: the kick is exact
+  if (!forces_.begin(id, t0, contact)) {
+    ++stats_.contacts_undriven;
+    return;
+  }
+  bool all = true;
+  for (std::size_t i = 0; i < coupling.size(); ++i) {
+    if (!kicked_[i]) continue;
+    const ModeSpec& m = v.modes[i];
+    all = forces_.add_mode(static_cast<uint32_t>(i), m.omega_d, m.decay,
+                           std::complex<double>(coupling[i]), std::complex<double>(amp[i])) &&
+          all;
+  }
+  if (!all) ++stats_.contacts_undriven;
+}
+
+void Synth::contact_gains(const void* self, int32_t voice, uint32_t mode, float gains[2]) {
+  const Voice& v = static_cast<const Synth*>(self)->voices_[voice];
+  const float g = v.modes[mode].gain;
+  gains[0] = g * v.pan[0];
+  gains[1] = g * v.pan[1];
 }
 
 void Synth::stop_voice(VoiceId id) {
@@ -224,6 +283,7 @@ void Synth::stop_voice(VoiceId id) {
       free_slot(static_cast<uint32_t>(s));
     }
   }
+  forces_.drop_voice(id);
   v.alive = false;
 }
 
@@ -232,6 +292,7 @@ void Synth::render(uint32_t frames, float* out, const DriveInput& drive) {
   fb_.set_high_water(std::max(high_water_, opt_.reserved_end));
   fb_.process(std::span(pending_.data(), pending_count_), frames, out, drive);
   pending_count_ = 0;
+  forces_.render(now_, frames, fb_.channels(), out, &Synth::contact_gains, this);
   now_ += frames;
   // Retire a round-robin share of the resident range (each slot is visited within ~8 renders).
   const uint32_t range = std::min(high_water_, budget_);

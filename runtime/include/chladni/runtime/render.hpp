@@ -23,7 +23,7 @@ namespace chladni::runtime {
 /// What a scene object sounds like: its modes, and how an impact excites them.
 struct ObjectModes {
   std::vector<ModeSpec> modes;  ///< damped angular frequency, decay, gain at 1 m
-  /// Complex state kick per mode for an impact; filled by impact_amplitudes().
+  /// Complex state kick per mode for an impact; filled by impact_coupling().
   const ModalModel* model = nullptr;  ///< geometry-backed objects
   const std::vector<InlineMode>* inline_modes = nullptr;
   /// Per-mode transfer (the model's, when it has one): gains then come from it, not from `gain`.
@@ -36,10 +36,10 @@ ObjectModes object_modes(const ModalModel& model);
 /// Inline modes: amplitude is the pressure at 1 m per N*s of impulse.
 ObjectModes object_modes(const std::vector<InlineMode>& modes);
 
-/// Per-mode complex amplitudes an impact adds to the filterbank states, for an impact whose
-/// contact starts `delay` seconds before the sample at which it is applied (sub-sample timing).
-void impact_amplitudes(const ObjectModes& object, const ImpactEvent& event, double delay,
-                       std::vector<std::complex<float>>& out);
+/// Per-mode state kick of an impact's whole impulse (Synth::strike() spreads it over the
+/// contact time).
+void impact_coupling(const ObjectModes& object, const ImpactEvent& event,
+                     std::vector<std::complex<float>>& out);
 
 /// The shaker voices a scene's shake events need: one per (object, instrument, resonance choice,
 /// particle count, impulse), voice v seeded with seed + v; `voice[e]` is scene.shakes[e]'s.

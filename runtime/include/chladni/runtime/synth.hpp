@@ -11,6 +11,7 @@
 #include <span>
 #include <vector>
 
+#include "chladni/runtime/contact_forces.hpp"
 #include "chladni/runtime/filterbank.hpp"
 
 namespace chladni::runtime {
@@ -29,12 +30,17 @@ struct SynthOptions {
   /// Slots [max_modes, reserved_end) belong to another user of the filterbank (a ShakerBank):
   /// the synth never takes them and keeps them in the processed range.
   uint32_t reserved_end = 0;
+  /// Modes (summed over impacts) and impacts that strike() drives through their contact at
+  /// once; past them an impact's modes start at the state they have after the contact.
+  uint32_t max_contact_modes = 1u << 15;
+  uint32_t max_contacts = 256;
 };
 
 struct SynthStats {
-  uint64_t retired = 0;  ///< modes retired by envelope
-  uint64_t stolen = 0;   ///< modes stolen to make room
-  uint64_t skipped = 0;  ///< excitations too weak to make a mode resident
+  uint64_t retired = 0;            ///< modes retired by envelope
+  uint64_t stolen = 0;             ///< modes stolen to make room
+  uint64_t skipped = 0;            ///< excitations too weak to make a mode resident
+  uint64_t contacts_undriven = 0;  ///< strikes past max_contacts / max_contact_modes
 };
 
 class Synth {
@@ -50,6 +56,12 @@ class Synth {
   void set_mode_gains(VoiceId voice, std::span<const float> gains);
   /// Adds amplitude[i] to mode i's state at sample `offset` of the next render().
   void excite(VoiceId voice, std::span<const std::complex<float>> amplitude, uint32_t offset);
+  /// An impact: `coupling[i]` is the state kick of mode i for the whole impulse, delivered by a
+  /// half-sine force over `contact` seconds (0: an ideal impulse) from fractional sample `start`
+  /// of the next render (-1 < start, ceil(start) < max_frames()). The modes build up under the
+  /// force as it acts and ring on from the state the contact leaves (contact_forces.hpp).
+  void strike(VoiceId voice, std::span<const std::complex<float>> coupling, double start,
+              double contact);
   /// Silences and forgets the voice; its slots are freed at once.
   void stop_voice(VoiceId voice);
 
@@ -73,6 +85,9 @@ class Synth {
     std::vector<int32_t> slot;  // -1 when not resident
     float pan[2] = {1, 1};
   };
+  void kick(Voice& voice, VoiceId id, std::span<const std::complex<float>> amplitude,
+            uint32_t offset);
+  static void contact_gains(const void* self, int32_t voice, uint32_t mode, float gains[2]);
   uint32_t allocate_slot();
   void free_slot(uint32_t slot);
   void steal(uint32_t needed);
@@ -96,6 +111,9 @@ class Synth {
   std::vector<uint32_t> group_used_;  // resident slots per group of 256
   std::vector<std::pair<float, uint32_t>> steal_scratch_;
   std::vector<Excitation> pending_;
+  std::vector<uint8_t> kicked_;  // per mode of the last kick(): whether it reached the filterbank
+  std::vector<std::complex<float>> strike_amp_;
+  ContactForces forces_;
   std::size_t pending_count_ = 0;
   uint32_t used_ = 0, high_water_ = 0, scan_cursor_ = 0;
   uint64_t now_ = 0;
