@@ -29,6 +29,7 @@ std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& r) {
       o.channels = r.channels;
       o.max_frames = r.max_frames;
       o.max_streams = r.max_streams;
+      o.gain_ramp = r.gain_ramp;
       return std::make_unique<runtime::GpuFilterbank>(ctx, o);
     } catch (const gpu::NoDeviceError& e) {
       std::fprintf(stderr, "warning: %s; using the CPU filterbank instead\n", e.what());
@@ -42,6 +43,7 @@ std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& r) {
   o.threads = r.threads;
   o.isa = parse_isa(r.isa);
   o.max_frames = r.max_frames;
+  o.gain_ramp = r.gain_ramp;
   if (!runtime::CpuFilterbank::supports(o.isa)) {
     throw InputError("--isa " + r.isa + ": not supported by this processor");
   }

@@ -21,7 +21,7 @@ namespace {
 struct RenderArgs {
   std::string scene, output, backend = "cpu", isa = "auto", format = "float";
   int sample_rate = 0, threads = 0;
-  uint32_t block = 256, max_modes = 0;
+  uint32_t block = 256, max_modes = 0, gain_ramp = 256;
   double normalize_db = NAN, retire_db = -100;
   bool quiet = false;
 };
@@ -118,6 +118,7 @@ void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
   req.capacity = budget + shakers.slots;
   req.max_streams = static_cast<uint32_t>(shakers.first_event.size());
   req.max_frames = std::max<uint32_t>(a.block, 256);
+  req.gain_ramp = a.gain_ramp;
   auto fb = make_filterbank(req);
 
   runtime::RenderOptions ro;
@@ -191,6 +192,11 @@ void add_render(CLI::App& app) {
       ->check(CLI::Range(8000, 384000));
   cmd->add_option("--block", a->block, "Frames per filterbank call")
       ->check(CLI::Range(1, 16384))
+      ->capture_default_str();
+  cmd->add_option("--gain-ramp", a->gain_ramp,
+                  "Samples over which listener and pose changes ramp the gains (at most --block; "
+                  "0: at once)")
+      ->check(CLI::Range(0, 65536))
       ->capture_default_str();
   cmd->add_option("--threads", a->threads, "CPU threads (0: all)")
       ->check(thread_count())

@@ -4,7 +4,8 @@
 layout(local_size_x = 64) in;
 
 struct Update {
-  uvec4 head;   // slot, flags (1: pole+state, 2: gains, 4: pole only, 8: drive), gain bits
+  uvec4 head;   // slot, flags (1: pole+state, 2: gains, 4: pole only, 8: drive, 16: gains
+                // to ramp to), gain bits
   vec4 pz;      // p.re, p.im, z.re, z.im
   uvec4 drive;  // input stream (~0: none), gain re bits, gain im bits, 0
 };
@@ -13,6 +14,7 @@ layout(std430, binding = 0) buffer Modes { vec4 modes[]; };
 layout(std430, binding = 1) buffer Gains { vec2 gains[]; };
 layout(std430, binding = 2) readonly buffer Updates { Update updates[]; };
 layout(std430, binding = 3) buffer Drives { uvec4 drives[]; };
+layout(std430, binding = 4) buffer Targets { vec2 targets[]; };
 
 layout(push_constant) uniform Push { uint count; } pc;
 
@@ -22,6 +24,7 @@ void main() {
   const Update u = updates[i];
   if ((u.head.y & 1u) != 0u) modes[u.head.x] = u.pz;
   if ((u.head.y & 2u) != 0u) gains[u.head.x] = uintBitsToFloat(u.head.zw);
+  if ((u.head.y & 18u) != 0u) targets[u.head.x] = uintBitsToFloat(u.head.zw);
   if ((u.head.y & 4u) != 0u) modes[u.head.x].xy = u.pz.xy;
   if ((u.head.y & 8u) != 0u) drives[u.head.x] = u.drive;
 }

@@ -21,25 +21,30 @@ layout(constant_id = 3) const uint ROWS_PER_GROUP = 8;
 // Driven slots (stochastic excitation): z[n] = p z[n-1] + a x_k[n], the input term added after
 // the pole product as in the CPU reference. A separate pipeline, so undriven banks pay nothing.
 layout(constant_id = 4) const bool DRIVEN = false;
+// Gain ramps: channel c outputs g_c z + r[n] (t_c - g_c) z with r[n] = min(1, (n + 1) / ramp),
+// the ramp's share summed apart as in the CPU reference; at the end the targets become the gains.
+layout(constant_id = 5) const bool RAMP = false;
 
 layout(std430, binding = 0) buffer Modes { vec4 modes[]; };  // (p.re, p.im, z.re, z.im)
-layout(std430, binding = 1) readonly buffer Gains { vec2 gains[]; };
+layout(std430, binding = 1) buffer Gains { vec2 gains[]; };
 layout(std430, binding = 2) readonly buffer Excitations { uvec4 exc[]; };  // see above
 layout(std430, binding = 3) writeonly buffer Partials { float partial[]; };
 layout(std430, binding = 4) readonly buffer Drives { uvec4 drive[]; };  // stream, a.re, a.im bits
 layout(std430, binding = 5) readonly buffer Inputs { float inputs[]; };  // stream-major rows
+layout(std430, binding = 6) readonly buffer Targets { vec2 targets[]; };  // equal gains unless ramping
 
 layout(push_constant) uniform Push {
   uint mode_count;  // slots [0, mode_count) are processed
   uint samples;
   uint exc_count;
-  uint pad;
+  uint ramp;  // samples of this call's gain ramp
 } pc;
 
 const uint NONE = 0xffffffffu;
 
 float pr[MPI], pi[MPI], zr[MPI], zi[MPI], g0[MPI], g1[MPI];
 float ar[DRIVEN ? MPI : 1], ai[DRIVEN ? MPI : 1];
+float d0[RAMP ? MPI : 1], d1[RAMP ? MPI : 1];
 uint src[DRIVEN ? MPI : 1];
 uint row_base;
 
@@ -87,6 +92,16 @@ void emit(uint n) {
     left += g0[j] * zi[j];
     if (CHANNELS == 2) right += g1[j] * zi[j];
   }
+  if (RAMP) {
+    float rl = 0.0, rr = 0.0;
+    for (uint j = 0; j < MPI; ++j) {
+      rl += d0[j] * zi[j];
+      if (CHANNELS == 2) rr += d1[j] * zi[j];
+    }
+    const float w = min(1.0, float(n + 1) / float(pc.ramp));
+    left += w * rl;
+    if (CHANNELS == 2) right += w * rr;
+  }
   left = subgroupAdd(left);
   if (CHANNELS == 2) right = subgroupAdd(right);
   if (subgroupElect()) {
@@ -107,6 +122,13 @@ void main() {
       const vec4 m = modes[s];
       const vec2 g = gains[s];
       pr[j] = m.x; pi[j] = m.y; zr[j] = m.z; zi[j] = m.w; g0[j] = g.x; g1[j] = g.y;
+    }
+    if (RAMP) {
+      d0[j] = 0.0; d1[j] = 0.0;
+      if (s < pc.mode_count) {
+        const vec2 t = targets[s];
+        d0[j] = t.x - g0[j]; d1[j] = t.y - g1[j];
+      }
     }
     if (DRIVEN) {
       src[j] = NONE; ar[j] = 0.0; ai[j] = 0.0;
@@ -153,6 +175,7 @@ void main() {
       // Flush states far below audibility: no denormal guarantee on every device.
       if (zr[j] * zr[j] + zi[j] * zi[j] < 1e-30) { zr[j] = 0.0; zi[j] = 0.0; }
       modes[s] = vec4(pr[j], pi[j], zr[j], zi[j]);
+      if (RAMP) gains[s] = targets[s];
     }
   }
 }

@@ -8,8 +8,10 @@
 #include <numbers>
 #include <vector>
 
+#include "chladni/core/scene.hpp"
 #include "chladni/runtime/cpu_filterbank.hpp"
 #include "chladni/runtime/gpu_filterbank.hpp"
+#include "chladni/runtime/render.hpp"
 #include "chladni/runtime/synth.hpp"
 #include "test_support.hpp"
 
@@ -122,4 +124,85 @@ TEST(Contact, SpansRendersAndSharesItsStorage) {
   const auto [tight, undriven] = run(16, 60);
   EXPECT_GT(undriven, 0u);
   EXPECT_LT(largest_step(tight), 10 * largest_step(whole));  // still no runaway
+}
+
+namespace {
+
+constexpr double kModeHz = 700;
+
+// One stereo object with one mode (so that its slope is known), struck twice (an ideal impulse,
+// then a 1 ms contact), heard by a listener who walks from 2 m to 0.3 m (17 dB louder) while the
+// object crosses from the listener's left to the right.
+Scene moving_scene() {
+  Scene s;
+  s.channels = 2;
+  s.duration = 1.2;
+  SceneObject o;
+  o.name = "bowl";
+  o.position = {-0.5, 2, 0};
+  o.modes = {{kModeHz, 2.0, 0.02}};
+  s.objects = {o};
+  ImpactEvent a;
+  a.time = 0.05;
+  a.impulse = 0.01;
+  ImpactEvent b = a;
+  b.time = 0.3000123;
+  b.contact_time = 0.001;
+  s.events = {a, b};
+  MoveEvent walk;
+  walk.time = 0.5;
+  walk.position = Vec3{0, 1.7, 0};
+  MoveEvent cross;
+  cross.time = 0.8;
+  cross.object = 0;
+  cross.position = Vec3{0.5, 2, 0};
+  s.moves = {walk, cross};
+  return s;
+}
+
+// Largest step from 2 ms before `at` to 8 ms after, over the largest step a free mode of the
+// window's peak level makes (2 sin(omega T / 2) peak): at most about 1 when nothing clicks.
+double step_ratio(const AudioBuffer& audio, double at) {
+  const int ch = audio.channels;
+  const auto n0 = static_cast<std::size_t>((at - 0.002) * kFs);
+  const auto n1 = static_cast<std::size_t>((at + 0.008) * kFs);
+  double worst = 0;
+  for (int c = 0; c < ch; ++c) {
+    double peak = 0, step = 0;
+    for (std::size_t n = n0; n < n1; ++n) {
+      const float y = audio.samples[n * ch + c], prev = audio.samples[(n - 1) * ch + c];
+      peak = std::max(peak, double(std::abs(y)));
+      step = std::max(step, double(std::abs(y - prev)));
+    }
+    worst = std::max(worst, step / (2 * std::sin(kPi * kModeHz / kFs) * peak));
+  }
+  return worst;
+}
+
+AudioBuffer render_moving(Filterbank& fb) {
+  const Scene scene = moving_scene();
+  std::vector<ObjectModes> objects{object_modes(scene.objects[0].modes)};
+  return render_scene(scene, objects, fb, RenderOptions{});
+}
+
+}  // namespace
+
+TEST(Clicks, NoEventStepsFasterThanTheSoundItself) {
+  std::vector<std::unique_ptr<Filterbank>> backends;
+  backends.push_back(std::make_unique<CpuFilterbank>(
+      CpuFilterbankOptions{.capacity = 256, .channels = 2, .threads = 1}));
+  if (auto ctx = test::gpu_context())
+    backends.push_back(
+        std::make_unique<GpuFilterbank>(ctx, GpuFilterbankOptions{.capacity = 256, .channels = 2}));
+  for (auto& fb : backends) {
+    SCOPED_TRACE(fb->name());
+    const AudioBuffer audio = render_moving(*fb);
+    for (double at : {0.05, 0.3000123, 0.5, 0.8})
+      EXPECT_LT(step_ratio(audio, at), 1.05) << "event at " << at << " s";
+  }
+  // The same scene with gains that change at once: the listener's step and the crossing click.
+  CpuFilterbank abrupt({.capacity = 256, .channels = 2, .threads = 1, .gain_ramp = 0});
+  const AudioBuffer audio = render_moving(abrupt);
+  EXPECT_GT(step_ratio(audio, 0.5), 3.0);
+  EXPECT_GT(step_ratio(audio, 0.8), 3.0);
 }

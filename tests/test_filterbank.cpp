@@ -85,28 +85,42 @@ TEST(Filterbank, SeveralExcitationsInOneBlockAndStereoGains) {
   }
 }
 
-TEST(Filterbank, GainChangeKeepsStateAndClearSilences) {
+TEST(Filterbank, GainChangeRampsKeepsStateAndClearSilences) {
   for (auto& fb : all_backends(64, 1)) {
     SCOPED_TRACE(fb->name());
     const float g1[2] = {1.0f, 0.0f}, g3[2] = {3.0f, 0.0f};
     fb->set_mode(3, pole(2 * std::numbers::pi * 500, 1.0, kFs), g1);
     fb->set_high_water(64);
-    std::vector<float> a(256), b(256);
+    std::vector<float> a(256), b(512);
     const Excitation e{3, 0, 1.0f, 0.0f};
     fb->process(std::span(&e, 1), 256, a.data());
     const std::complex<float> z = fb->state(3);
     fb->set_gains(3, g3);
     fb->process({}, 256, b.data());
-    // The state went on: sample 256 + n equals 3 x Im(p^(n+1) z).
+    fb->process({}, 256, b.data() + 256);
+    // The state went on, and the gain ramped from 1 to 3 over gain_ramp() samples of the first
+    // call: sample 256 + n equals g(n) x Im(p^(n+1) z).
+    ASSERT_EQ(fb->gain_ramp(), 256u);
     const std::complex<float> p = pole(2 * std::numbers::pi * 500, 1.0, kFs);
     std::complex<double> zz = z;
-    for (int n = 0; n < 256; ++n) {
+    for (int n = 0; n < 512; ++n) {
       zz *= std::complex<double>(p);
-      EXPECT_NEAR(b[n], 3.0 * zz.imag(), 1e-5);
+      const double g = 1.0 + 2.0 * std::min(1.0, (n + 1) / 256.0);
+      EXPECT_NEAR(b[n], g * zz.imag(), 1e-5) << "sample " << n;
     }
     fb->clear_mode(3);
     fb->process({}, 256, b.data());
-    for (float x : b) EXPECT_EQ(x, 0.0f);
+    for (int n = 0; n < 256; ++n) EXPECT_EQ(b[n], 0.0f);
+    // A mode started in this call takes its new gains at once: it has no sound to click.
+    fb->set_mode(5, pole(2 * std::numbers::pi * 700, 1.0, kFs), g1);
+    fb->set_gains(5, g3);
+    const Excitation e5{5, 0, 1.0f, 0.0f};
+    fb->process(std::span(&e5, 1), 64, b.data());
+    std::complex<double> z5 = 1.0;
+    for (int n = 0; n < 64; ++n) {
+      EXPECT_NEAR(b[n], 3.0 * z5.imag(), 1e-5) << "sample " << n;
+      z5 *= std::complex<double>(pole(2 * std::numbers::pi * 700, 1.0, kFs));
+    }
   }
 }
 
@@ -134,6 +148,13 @@ void random_run(Filterbank& fb, uint32_t modes, uint32_t block, uint32_t blocks,
         exc.push_back({s, off(rng), float(amp(rng)), float(amp(rng))});
     } else if (b % 50 == 0) {
       for (int k = 0; k < 500; ++k) exc.push_back({slot(rng), off(rng), float(amp(rng)), 0.0f});
+    }
+    if (b % 7 == 3) {  // gain changes ramp (every backend the same way)
+      for (int k = 0; k < 200; ++k) {
+        const float g[2] = {static_cast<float>(gain(rng) / std::sqrt(modes)),
+                            static_cast<float>(gain(rng) / std::sqrt(modes))};
+        fb.set_gains(slot(rng), g);
+      }
     }
     fb.process(exc, block, out.data() + std::size_t(b) * block * ch);
   }

@@ -52,7 +52,8 @@ CpuFilterbank::CpuFilterbank(const CpuFilterbankOptions& o)
       high_water_(o.capacity),
       channels_(o.channels),
       max_frames_(o.max_frames),
-      max_excitations_(o.max_excitations) {
+      max_excitations_(o.max_excitations),
+      gain_ramp_(o.gain_ramp) {
   if (o.capacity == 0) throw std::invalid_argument("filterbank capacity must be > 0");
   if (o.channels != 1 && o.channels != 2) throw std::invalid_argument("channels must be 1 or 2");
   if (o.max_frames == 0) throw std::invalid_argument("max_frames must be > 0");
@@ -71,6 +72,11 @@ CpuFilterbank::CpuFilterbank(const CpuFilterbankOptions& o)
   g1_.reset(aligned_floats(padded_));
   ar_.reset(aligned_floats(padded_));
   ai_.reset(aligned_floats(padded_));
+  t0_.reset(aligned_floats(padded_));
+  t1_.reset(aligned_floats(padded_));
+  touch_.assign(padded_, kIdle);
+  touched_.reserve(padded_);
+  ramp_.resize(max_frames_);
   src_.assign(padded_, kNoStream);
   const int threads = o.threads > 0
                           ? o.threads
@@ -94,8 +100,10 @@ void CpuFilterbank::set_mode(uint32_t slot, std::complex<float> p, const float g
   pr_[slot] = p.real();
   pi_[slot] = p.imag();
   zr_[slot] = zi_[slot] = 0.0f;
-  g0_[slot] = gains[0];
-  g1_[slot] = channels_ == 2 ? gains[1] : 0.0f;
+  t0_[slot] = g0_[slot] = gains[0];
+  t1_[slot] = g1_[slot] = channels_ == 2 ? gains[1] : 0.0f;
+  if (touch_[slot] == kIdle) touched_.push_back(slot);
+  touch_[slot] = kStarted;
   set_input(slot, kNoStream, {0, 0});
 }
 
@@ -115,8 +123,15 @@ void CpuFilterbank::set_input(uint32_t slot, uint32_t stream, std::complex<float
 
 void CpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
   if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
-  g0_[slot] = gains[0];
-  g1_[slot] = channels_ == 2 ? gains[1] : 0.0f;
+  t0_[slot] = gains[0];
+  t1_[slot] = channels_ == 2 ? gains[1] : 0.0f;
+  if (gain_ramp_ == 0 || touch_[slot] == kStarted) {
+    g0_[slot] = t0_[slot];
+    g1_[slot] = t1_[slot];
+    return;
+  }
+  if (touch_[slot] == kIdle) touched_.push_back(slot);
+  touch_[slot] = kRamping;
 }
 
 void CpuFilterbank::set_high_water(uint32_t slots) {
@@ -138,6 +153,9 @@ void CpuFilterbank::run_task(void* self_ptr, int t) {
   a.zi = self->zi_.get();
   a.g0 = self->g0_.get();
   a.g1 = self->g1_.get();
+  a.t0 = self->t0_.get();
+  a.t1 = self->t1_.get();
+  a.ramp = self->ramping_ ? self->ramp_.data() : nullptr;
   a.begin = r[0];
   a.end = r[1];
   a.exc = self->sorted_.data() + r[2];
@@ -196,6 +214,13 @@ void CpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
     return a.slot < b.slot;
   });
   frames_ = frames;
+  ramping_ = false;
+  for (uint32_t s : touched_) ramping_ = ramping_ || touch_[s] == kRamping;
+  if (ramping_) {
+    const float length = static_cast<float>(std::min(gain_ramp_, frames));
+    for (uint32_t n = 0; n < frames; ++n)
+      ramp_[n] = std::min(1.0f, static_cast<float>(n + 1) / length);
+  }
   const uint32_t active = (high_water_ + cpu::kGroup - 1) / cpu::kGroup * cpu::kGroup;
   const int tasks = pool_->threads();
   const uint32_t groups = active / cpu::kGroup;
@@ -210,6 +235,12 @@ void CpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
         std::lower_bound(sorted_.begin(), sorted_.begin() + ne, r[1], by_slot) - sorted_.begin());
   }
   pool_->run(&CpuFilterbank::run_task, this, tasks);
+  for (uint32_t s : touched_) {  // ramps are over: the targets are the gains
+    g0_[s] = t0_[s];
+    g1_[s] = t1_[s];
+    touch_[s] = kIdle;
+  }
+  touched_.clear();
   const std::size_t count = static_cast<std::size_t>(frames) * channels_;
   std::memcpy(out, task_out_.data(), count * sizeof(float));
   for (int t = 1; t < tasks; ++t) {

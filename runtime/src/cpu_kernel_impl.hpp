@@ -10,7 +10,7 @@ namespace chladni::runtime::cpu {
 namespace {
 
 // S: a SIMD "ops" struct with type V, width W, load/store/set1/zero/add/mul/fmadd/fmsub.
-template <class S, int CH, int NV, bool DRIVEN>
+template <class S, int CH, int NV, bool DRIVEN, bool RAMP>
 void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Excitation* ex_end) {
   using V = typename S::V;
   constexpr int W = S::W;
@@ -24,6 +24,14 @@ void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Exci
     zi[v] = S::load(a.zi + s);
     g0[v] = S::load(a.g0 + s);
     g1[v] = CH == 2 ? S::load(a.g1 + s) : S::zero();
+  }
+  // Ramping tiles: output g z + r[n] (target - g) z, the ramp's share summed apart.
+  [[maybe_unused]] V d0[RAMP ? NV : 1], d1[RAMP ? NV : 1];
+  if constexpr (RAMP) {
+    for (int v = 0; v < NV; ++v) {
+      d0[v] = S::sub(S::load(a.t0 + t0 + v * W), g0[v]);
+      d1[v] = CH == 2 ? S::sub(S::load(a.t1 + t0 + v * W), g1[v]) : S::zero();
+    }
   }
   // Driven tiles: input gains, and per lane the row of its stream (nullptr when undriven).
   // Usually every driven lane of a tile reads one stream (a voice's modes are consecutive): then
@@ -75,6 +83,16 @@ void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Exci
     for (int v = 0; v < NV; ++v) {
       acc0 = S::fmadd(g0[v], zi[v], acc0);
       if constexpr (CH == 2) acc1 = S::fmadd(g1[v], zi[v], acc1);
+    }
+    if constexpr (RAMP) {
+      V r0 = S::zero(), r1 = S::zero();
+      for (int v = 0; v < NV; ++v) {
+        r0 = S::fmadd(d0[v], zi[v], r0);
+        if constexpr (CH == 2) r1 = S::fmadd(d1[v], zi[v], r1);
+      }
+      const V w = S::set1(a.ramp[n]);
+      acc0 = S::fmadd(w, r0, acc0);
+      if constexpr (CH == 2) acc1 = S::fmadd(w, r1, acc1);
     }
     float* l = a.lanes + static_cast<std::size_t>(n) * CH * W;
     S::store(l, S::add(S::load(l), acc0));
@@ -133,14 +151,20 @@ void run_range(const KernelArgs& a) {
     const Excitation* gend = ex;
     while (gend != ex_all_end && gend->slot < g0 + kGroup) ++gend;
     for (uint32_t t0 = g0; t0 < g0 + kGroup; t0 += T) {
-      bool driven = false;
+      bool driven = false, ramp = false;
       if (a.in) {
         for (uint32_t l = 0; l < T && !driven; ++l) driven = a.src[t0 + l] != kNoStream;
       }
+      if (a.ramp) {
+        for (uint32_t l = 0; l < T && !ramp; ++l)
+          ramp = a.t0[t0 + l] != a.g0[t0 + l] || (CH == 2 && a.t1[t0 + l] != a.g1[t0 + l]);
+      }
       if (driven)
-        run_tile<S, CH, NV, true>(a, t0, ex, gend);
+        ramp ? run_tile<S, CH, NV, true, true>(a, t0, ex, gend)
+             : run_tile<S, CH, NV, true, false>(a, t0, ex, gend);
       else
-        run_tile<S, CH, NV, false>(a, t0, ex, gend);
+        ramp ? run_tile<S, CH, NV, false, true>(a, t0, ex, gend)
+             : run_tile<S, CH, NV, false, false>(a, t0, ex, gend);
     }
     ex = gend;
   }

@@ -17,6 +17,11 @@ struct KernelArgs {
   float* zi;
   const float* g0;
   const float* g1;
+  /// Gain ramps (nullptr `ramp`: none this call): target gains per slot (equal to g0/g1 where
+  /// nothing ramps) and the ramp's weight per sample, min(1, (n + 1) / length).
+  const float* t0;
+  const float* t1;
+  const float* ramp;
   uint32_t begin, end;  ///< slot range, multiples of kGroup (arrays are padded)
   /// Excitations with slot in [begin, end), sorted by (slot / kGroup, offset, slot).
   const Excitation* exc;

@@ -25,8 +25,9 @@ uint32_t div_up(uint64_t a, uint64_t b) {
 }
 
 struct FilterbankPush {
-  uint32_t mode_count, samples, exc_count, pad;
+  uint32_t mode_count, samples, exc_count, ramp;
 };
+constexpr uint32_t kGains = 2, kRampTo = 16;  // Update flags (apply_updates.comp)
 struct ReducePush {
   uint32_t src_offset, dst_offset, rows, count, chunk, final_pass;
 };
@@ -50,7 +51,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
       high_water_(o.capacity),
       local_(o.workgroup_size),
       mpi_(o.modes_per_invocation),
-      max_streams_(o.max_streams) {
+      max_streams_(o.max_streams),
+      gain_ramp_(o.gain_ramp) {
   static_assert(sizeof(Update) == 48, "matches apply_updates.comp");
   if (!ctx_) throw std::invalid_argument("GpuFilterbank needs a Vulkan context");
   if (capacity_ == 0) throw std::invalid_argument("filterbank capacity must be > 0");
@@ -87,6 +89,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   modes_ = std::make_unique<gpu::Buffer>(c, mode_bytes, gpu::Memory::DeviceLocal);
   gains_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 8,
                                          gpu::Memory::DeviceLocal);
+  targets_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 8,
+                                           gpu::Memory::DeviceLocal);
   // One spare entry: the shader may read the entry after its list.
   excitations_ = std::make_unique<gpu::Buffer>(c, (uint64_t{max_excitations_} + 1) * 16,
                                                gpu::Memory::HostVisible);
@@ -107,16 +111,18 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
                                           gpu::Memory::HostVisible);
   modes_->zero();
   gains_->zero();
+  targets_->zero();
   {
     std::vector<uint32_t> none(uint64_t{groups} * group_modes * 4, 0);
     for (std::size_t i = 0; i < none.size(); i += 4) none[i] = kNone;
     drives_->upload(none.data(), none.size() * sizeof(uint32_t));
   }
 
-  auto make_filterbank = [&](bool driven) {
-    const gpu::SpecConstant spec[] = {
-        {0, local_}, {1, mpi_}, {2, channels_}, {3, rows_per_group_}, {4, driven ? 1u : 0u}};
-    auto p = std::make_unique<gpu::Pipeline>(c, std::span(k_filterbank_spv), 6,
+  auto make_filterbank = [&](bool driven, bool ramp) {
+    const gpu::SpecConstant spec[] = {{0, local_},           {1, mpi_},
+                                      {2, channels_},        {3, rows_per_group_},
+                                      {4, driven ? 1u : 0u}, {5, ramp ? 1u : 0u}};
+    auto p = std::make_unique<gpu::Pipeline>(c, std::span(k_filterbank_spv), 7,
                                              sizeof(FilterbankPush), spec);
     p->bind(0, *modes_);
     p->bind(1, *gains_);
@@ -124,18 +130,20 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
     p->bind(3, *scratch_);
     p->bind(4, *drives_);
     p->bind(5, *inputs_);
+    p->bind(6, *targets_);
     return p;
   };
-  filterbank_ = make_filterbank(false);
-  filterbank_driven_ = make_filterbank(true);
+  for (int driven = 0; driven < 2; ++driven)
+    for (int ramp = 0; ramp < 2; ++ramp) filterbank_[driven][ramp] = make_filterbank(driven, ramp);
   reduce_ = std::make_unique<gpu::Pipeline>(c, std::span(k_reduce_spv), 2, sizeof(ReducePush));
   reduce_->bind(0, *scratch_);
   reduce_->bind(1, *result_);
-  apply_ = std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 4, sizeof(uint32_t));
+  apply_ = std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 5, sizeof(uint32_t));
   apply_->bind(0, *modes_);
   apply_->bind(1, *gains_);
   apply_->bind(2, *updates_);
   apply_->bind(3, *drives_);
+  apply_->bind(4, *targets_);
   seq_ = std::make_unique<gpu::Sequence>(c, 4);
   pending_index_.assign(capacity_, kNone);
   stream_.assign(capacity_, kNone);
@@ -152,7 +160,7 @@ GpuFilterbank::Update& GpuFilterbank::pending(uint32_t slot) {
   auto* list = static_cast<Update*>(updates_->data());
   uint32_t& idx = pending_index_[slot];
   if (idx == kNone) {
-    if (update_count_ == max_updates_) flush_updates();
+    if (update_count_ == max_updates_) flush_updates(true);
     idx = update_count_++;
     list[idx] = Update{slot, 0, {0, 0}, {0, 0, 0, 0}, kNone, {0, 0}, 0};
   }
@@ -193,7 +201,13 @@ void GpuFilterbank::set_input(uint32_t slot, uint32_t stream, std::complex<float
 
 void GpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
   Update& u = pending(slot);
-  u.flags |= 2u;
+  // A mode started since the last call has no sound to click: its gains apply at once.
+  if (gain_ramp_ == 0 || (u.flags & 3u)) {
+    u.flags |= kGains;
+  } else {
+    u.flags |= kRampTo;
+    ramps_pending_ = true;
+  }
   u.gain[0] = gains[0];
   u.gain[1] = channels_ == 2 ? gains[1] : 0.0f;
 }
@@ -214,7 +228,12 @@ void GpuFilterbank::clear_updates() {
   update_count_ = 0;
 }
 
-void GpuFilterbank::flush_updates() {
+void GpuFilterbank::flush_updates(bool ramps_at_once) {
+  if (ramps_at_once) {  // an overflowing batch: the ramp would outlive its updates
+    auto* list = static_cast<Update*>(updates_->data());
+    for (uint32_t i = 0; i < update_count_; ++i)
+      if (list[i].flags & kRampTo) list[i].flags = (list[i].flags & ~kRampTo) | kGains;
+  }
   seq_->begin();
   record_updates();
   seq_->run();
@@ -276,6 +295,13 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   const uint32_t group_modes = local_ * mpi_;
   const uint32_t groups = div_up(high_water_, group_modes);
   const uint32_t count = frames * channels_;
+  {  // Slots past the processed range take their gains at once: no dispatch would commit a ramp.
+    auto* list = static_cast<Update*>(updates_->data());
+    for (uint32_t i = 0; i < update_count_; ++i)
+      if ((list[i].flags & kRampTo) && list[i].slot >= groups * group_modes)
+        list[i].flags = (list[i].flags & ~kRampTo) | kGains;
+  }
+  const bool ramp = ramps_pending_ && groups > 0;
   seq_->begin();
   seq_->timestamp(0);
   record_updates();
@@ -287,8 +313,8 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
     seq_->fill_zero(*result_);
     seq_->barrier();
   } else {
-    const FilterbankPush fp{groups * group_modes, frames, ne, 0};
-    seq_->dispatch(driven ? *filterbank_driven_ : *filterbank_, groups, &fp, sizeof(fp));
+    const FilterbankPush fp{groups * group_modes, frames, ne, std::min(gain_ramp_, frames)};
+    seq_->dispatch(*filterbank_[driven][ramp], groups, &fp, sizeof(fp));
     seq_->barrier();
     seq_->timestamp(1);
     // Tree reduction of the partial rows: rows -> ceil(rows/64) -> ... -> result.
@@ -312,6 +338,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
   std::memcpy(out, result_->data(), sizeof(float) * count);
   clear_updates();
+  if (ramp) ramps_pending_ = false;
 }
 
 }  // namespace chladni::runtime

@@ -22,6 +22,7 @@ struct CpuFilterbankOptions {
   CpuIsa isa = CpuIsa::Auto;
   uint32_t max_frames = 4096;
   uint32_t max_excitations = 1u << 20;
+  uint32_t gain_ramp = 256;  ///< samples over which gain changes ramp (0: at once)
 };
 
 class CpuFilterbank final : public Filterbank {
@@ -44,6 +45,7 @@ class CpuFilterbank final : public Filterbank {
   void set_pole(uint32_t slot, std::complex<float> pole) override;
   void set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) override;
   void set_gains(uint32_t slot, const float gains[2]) override;
+  uint32_t gain_ramp() const override { return gain_ramp_; }
   void set_high_water(uint32_t slots) override;
   using Filterbank::process;
   void process(std::span<const Excitation> excitations, uint32_t frames, float* out,
@@ -62,7 +64,14 @@ class CpuFilterbank final : public Filterbank {
   struct AlignedFree {
     void operator()(float* p) const;
   };
-  std::unique_ptr<float[], AlignedFree> pr_, pi_, zr_, zi_, g0_, g1_, ar_, ai_;
+  std::unique_ptr<float[], AlignedFree> pr_, pi_, zr_, zi_, g0_, g1_, ar_, ai_, t0_, t1_;
+  // Gain ramps: targets t0_/t1_ equal g0_/g1_ except for slots listed in touched_, whose state
+  // says whether they ramp or were started this call (their gains then apply at once).
+  enum : uint8_t { kIdle = 0, kRamping = 1, kStarted = 2 };
+  uint32_t gain_ramp_;
+  std::vector<uint8_t> touch_;
+  std::vector<uint32_t> touched_;
+  std::vector<float> ramp_;    // per sample of a call: min(1, (n + 1) / length)
   std::vector<uint32_t> src_;  // input stream per slot, kNoStream when undriven
   uint32_t driven_ = 0;        // slots with a stream
   DriveInput input_;
@@ -71,6 +80,7 @@ class CpuFilterbank final : public Filterbank {
   std::vector<uint32_t> task_range_;  // per task: begin, end, exc_begin, exc_end
   std::unique_ptr<ThreadPool> pool_;
   uint32_t frames_ = 0;
+  bool ramping_ = false;
 };
 
 }  // namespace chladni::runtime

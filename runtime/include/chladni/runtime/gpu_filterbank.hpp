@@ -27,6 +27,7 @@ struct GpuFilterbankOptions {
   uint64_t scratch_budget_bytes = 256ull << 20;
   /// Input streams for driven slots (stream rows of max_frames floats on the device).
   uint32_t max_streams = 0;
+  uint32_t gain_ramp = 256;  ///< samples over which gain changes ramp (0: at once)
 };
 
 /// Records device work that fills GpuFilterbank::input_buffer() for one process() call (a
@@ -61,6 +62,7 @@ class GpuFilterbank final : public Filterbank {
   void set_pole(uint32_t slot, std::complex<float> pole) override;
   void set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) override;
   void set_gains(uint32_t slot, const float gains[2]) override;
+  uint32_t gain_ramp() const override { return gain_ramp_; }
   void set_high_water(uint32_t slots) override;
   using Filterbank::process;
   void process(std::span<const Excitation> excitations, uint32_t frames, float* out,
@@ -72,15 +74,18 @@ class GpuFilterbank final : public Filterbank {
   struct Update;
   Update& pending(uint32_t slot);
   void record_updates();
-  void flush_updates();
+  void flush_updates(bool ramps_at_once = false);
   void clear_updates();  // after a submit has applied them
 
   std::shared_ptr<gpu::Context> ctx_;
   uint32_t capacity_, channels_, max_frames_, max_excitations_, high_water_;
   uint32_t local_, mpi_, rows_per_group_, max_updates_, max_streams_;
   std::unique_ptr<gpu::Buffer> modes_, gains_, excitations_, scratch_, result_, updates_;
-  std::unique_ptr<gpu::Buffer> drives_, inputs_;
-  std::unique_ptr<gpu::Pipeline> filterbank_, filterbank_driven_, reduce_, apply_;
+  std::unique_ptr<gpu::Buffer> drives_, inputs_, targets_;
+  std::unique_ptr<gpu::Pipeline> filterbank_[2][2];  // [driven][ramp]
+  std::unique_ptr<gpu::Pipeline> reduce_, apply_;
+  uint32_t gain_ramp_;
+  bool ramps_pending_ = false;    // targets on the device differ from the gains
   std::vector<uint32_t> stream_;  // per slot, host mirror of the drive's stream
   uint32_t driven_ = 0;
   GpuInputStage* stage_ = nullptr;
