@@ -20,6 +20,7 @@
 #include "chladni/runtime/paper_scenarios.hpp"
 #include "chladni/runtime/paper_synth.hpp"
 #include "commands.hpp"
+#include "paper_db_cache.hpp"
 #include "progress.hpp"
 #include "spectrogram.hpp"
 
@@ -56,12 +57,9 @@ struct AnalyzeArgs {
 
 runtime::PaperSoundDb database(const std::string& dir) {
   if (!dir.empty()) return runtime::load_paper_database(dir);
-  const auto t = std::chrono::steady_clock::now();
-  runtime::PaperSoundDb db = runtime::generate_paper_database({});
-  std::printf(
-      "generated the default paper sound database in memory (%.1f s; keep one with "
-      "'chladni paper-db generate -o DIR' and pass --db DIR)\n",
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count());
+  std::string note;
+  runtime::PaperSoundDb db = default_paper_database(cache_dir(), note);
+  std::printf("%s\n", note.c_str());
   return db;
 }
 

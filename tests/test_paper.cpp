@@ -10,10 +10,12 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
+#include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/paper_animation.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
 #include "chladni/runtime/paper_scenarios.hpp"
+#include "cli_support.hpp"
 #include "paper_fixtures.hpp"
 #include "test_support.hpp"
 
@@ -398,8 +400,9 @@ TEST(PaperCli, GeneratesAndAnalysesTheExamples) {
   for (const std::string n : {"slide", "shake", "flap", "crumple"})
     EXPECT_TRUE(std::filesystem::exists(dir + "/" + n + ".json")) << n;
   const std::string events = dir + "/flap_events.json";
-  ASSERT_EQ(std::system(
-                (exe + " paper " + dir + "/flap.json --events " + events + " > /dev/null").c_str()),
+  ASSERT_EQ(std::system(("CHLADNI_CACHE_DIR=" + dir + "/cache " + exe + " paper " + dir +
+                         "/flap.json --events " + events + " > /dev/null")
+                            .c_str()),
             0);
   std::ifstream in(events);
   const auto j = nlohmann::json::parse(in);
@@ -407,6 +410,58 @@ TEST(PaperCli, GeneratesAndAnalysesTheExamples) {
   // Bad input: exit code 2.
   const int status = std::system((exe + " paper " + dir + "/nope.json 2> /dev/null").c_str());
   EXPECT_EQ(WEXITSTATUS(status), 2);
+}
+
+TEST(PaperCli, DefaultDatabaseIsCachedOnceAndADamagedCacheIsRebuilt) {
+  const std::string dir = test::temp_path("paper_cache");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string env = "CHLADNI_CACHE_DIR=" + dir + "/cache";
+  auto paper = [&](const std::string& wav, const std::string& e) {
+    return test::run_cli(
+        "paper " CHLADNI_SOURCE_DIR "/meshes/paper/slide.json -o " + dir + "/" + wav, e);
+  };
+  auto bytes = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  // The same samples (the files' PEAK chunks carry a time stamp).
+  auto same = [&](const std::string& a, const std::string& b) {
+    return read_audio(dir + "/" + a).samples == read_audio(dir + "/" + b).samples;
+  };
+  test::CliResult r = paper("a.wav", env);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("generated the default paper sound database"), std::string::npos);
+  EXPECT_NE(r.output.find("cached in " + dir + "/cache/"), std::string::npos) << r.output;
+  std::string snapshot;
+  for (const auto& f : std::filesystem::directory_iterator(dir + "/cache")) snapshot = f.path();
+  ASSERT_FALSE(snapshot.empty());
+  // From the cache: the same sound, sample for sample.
+  r = paper("b.wav", env);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("read the default paper sound database from " + snapshot),
+            std::string::npos)
+      << r.output;
+  EXPECT_TRUE(same("a.wav", "b.wav"));
+  // A damaged byte, then a truncated file: each is noticed, regenerated and replaced.
+  std::string snap = bytes(snapshot);
+  snap[snap.size() / 2] ^= 0x40;
+  std::ofstream(snapshot, std::ios::binary) << snap;
+  r = paper("c.wav", env);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("CRC mismatch"), std::string::npos) << r.output;
+  EXPECT_TRUE(same("a.wav", "c.wav"));
+  std::filesystem::resize_file(snapshot, 1000);
+  r = paper("d.wav", env);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("unusable"), std::string::npos) << r.output;
+  r = paper("e.wav", env);
+  EXPECT_NE(r.output.find("read the default paper sound database"), std::string::npos) << r.output;
+  // An empty CHLADNI_CACHE_DIR caches nothing.
+  r = paper("f.wav", "CHLADNI_CACHE_DIR=");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_EQ(r.output.find("cached"), std::string::npos) << r.output;
+  EXPECT_TRUE(same("a.wav", "f.wav"));
 }
 
 TEST(PaperExamples, ShippedAnimationsHaveTheirEventsAtTheirFrames) {
