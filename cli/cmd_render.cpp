@@ -11,8 +11,8 @@
 #include "chladni/core/scene.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
-#include "chladni/precompute/analytic_bar.hpp"
 #include "chladni/runtime/render.hpp"
+#include "chladni/runtime/scene_objects.hpp"
 #include "commands.hpp"
 
 namespace chladni::cli {
@@ -26,82 +26,17 @@ struct RenderArgs {
   bool quiet = false;
 };
 
-// Ends a summary line with the object's lowest damped frequencies.
-void print_lowest(const ModalModel& model) {
-  for (std::size_t i = 0; i < std::min<std::size_t>(5, model.mode_count()); ++i)
-    std::printf(" %.1f", model.damped_omega(i) / (2 * std::numbers::pi));
-  std::printf(" Hz\n");
-}
-
-// Builds each object's modal description; models must outlive the ObjectModes that point at them.
-void resolve_objects(const Scene& scene, std::vector<std::unique_ptr<ModalModel>>& models,
-                     std::vector<runtime::ObjectModes>& objects, bool quiet) {
-  for (const SceneObject& obj : scene.objects) {
-    switch (obj.source) {
-      case SceneObject::Source::Modes:
-        objects.push_back(runtime::object_modes(obj.modes));
-        if (!quiet) std::printf("  %-12s %zu inline modes\n", obj.name.c_str(), obj.modes.size());
-        break;
-      case SceneObject::Source::Bar: {
-        std::unique_ptr<ModalModel> model;
-        try {
-          model = std::make_unique<ModalModel>(precompute::analytic_bar(obj.bar));
-        } catch (const InputError& e) {
-          throw InputError(obj.json_path + ".bar: " + e.what());
-        }
-        model->name = obj.name;
-        const ModeSelection sel =
-            apply_damping(*model, obj.bar.damping, 20.0, obj.bar.max_frequency, scene.sample_rate);
-        keep_modes(*model, sel.kept);
-        if (model->mode_count() == 0) {
-          throw InputError(obj.json_path + ".bar: no mode lies in the audible band");
-        }
-        if (!quiet) {
-          std::printf(
-              "  %-12s analytic bar %.3f x %.3f x %.3f m, %s: %zu modes (%zu overdamped, "
-              "%zu out of band); lowest",
-              obj.name.c_str(), obj.bar.length, obj.bar.width, obj.bar.thickness,
-              obj.bar.damping.to_string().c_str(), model->mode_count(), sel.overdamped,
-              sel.below_band + sel.above_band);
-          print_lowest(*model);
-        }
-        models.push_back(std::move(model));
-        objects.push_back(runtime::object_modes(*models.back()));
-        break;
-      }
-      case SceneObject::Source::Soundbank: {
-        const Soundbank bank = read_soundbank(obj.soundbank);
-        auto model = std::make_unique<ModalModel>(to_modal_model(bank, obj.name));
-        // The bank was made for some sample rate; keep what this scene can play.
-        std::vector<std::size_t> kept;
-        for (std::size_t i = 0; i < model->mode_count(); ++i)
-          if (model->damped_omega(i) < std::numbers::pi * scene.sample_rate) kept.push_back(i);
-        const std::size_t dropped = model->mode_count() - kept.size();
-        keep_modes(*model, kept);
-        if (model->mode_count() == 0)
-          throw InputError(obj.json_path + ".soundbank: " + obj.soundbank +
-                           " has no mode below the scene's Nyquist frequency");
-        if (!quiet) {
-          std::printf("  %-12s soundbank %s (%s, %s): %zu modes (%zu above Nyquist); lowest",
-                      obj.name.c_str(), obj.soundbank.c_str(), bank.material.name.c_str(),
-                      bank.material.damping.to_string().c_str(), model->mode_count(), dropped);
-          print_lowest(*model);
-        }
-        models.push_back(std::move(model));
-        objects.push_back(runtime::object_modes(*models.back()));
-        break;
-      }
-    }
-  }
-}
-
 void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
   if (!a.quiet)
     std::printf("scene %s: %zu objects, %zu impacts, %zu moves, %zu shakes\n", a.scene.c_str(),
                 scene.objects.size(), scene.events.size(), scene.moves.size(), scene.shakes.size());
-  std::vector<std::unique_ptr<ModalModel>> models;
+  const std::vector<runtime::PlayableObject> playable = runtime::resolve_objects(scene);
   std::vector<runtime::ObjectModes> objects;
-  resolve_objects(scene, models, objects, a.quiet);
+  for (std::size_t k = 0; k < playable.size(); ++k) {
+    objects.push_back(playable[k].modes);
+    if (!a.quiet)
+      std::printf("  %-12s %s\n", scene.objects[k].name.c_str(), playable[k].summary.c_str());
+  }
 
   std::size_t total_modes = 0;
   for (const auto& o : objects) total_modes += o.modes.size();

@@ -14,6 +14,7 @@
 #include "chladni/core/soundbank.hpp"
 #include "chladni/runtime/filterbank.hpp"
 #include "chladni/runtime/render.hpp"
+#include "chladni/runtime/scene_objects.hpp"
 #include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/transfer_gains.hpp"
 #include "commands.hpp"
@@ -41,10 +42,8 @@ Vec3 parse_vec3(const std::string& s, const char* what) {
   return v;
 }
 
-// Per-mode pressure gains at the listener (object frame): transfer where its fit is usable, else
-// the compact-source estimate spread over distance (as render does).
+// Per-mode pressure gains at the listener (object frame), by the runtime's rule.
 void listener_gains(const ModalModel& model, runtime::ObjectModes& object, const Vec3& listener) {
-  const double r = std::max(norm(listener), 0.1);
   std::vector<float> xfer;
   if (model.transfer) {
     runtime::TransferTable table;
@@ -56,11 +55,9 @@ void listener_gains(const ModalModel& model, runtime::ObjectModes& object, const
     xfer.resize(table.mode_count());
     runtime::transfer_gains(table, frame, xfer);
   }
-  for (std::size_t i = 0; i < object.modes.size(); ++i) {
-    object.modes[i].gain = !xfer.empty() && model.transfer->usable(i)
-                               ? xfer[i]
-                               : static_cast<float>(object.modes[i].gain / r);
-  }
+  std::vector<float> gains(object.modes.size());
+  runtime::listener_mode_gains(object, xfer, 1.0, 1.0 / std::max(norm(listener), 0.1), gains);
+  for (std::size_t i = 0; i < gains.size(); ++i) object.modes[i].gain = gains[i];
 }
 
 void list_instruments() {
@@ -86,15 +83,8 @@ void run_shake(const ShakeArgs& a) {
   runtime::ObjectModes object;
   std::vector<runtime::ShakerVoice> voices;
   if (!a.bank.empty()) {
-    const Soundbank bank = read_soundbank(a.bank);
-    model = std::make_unique<ModalModel>(to_modal_model(bank, "object"));
-    std::vector<std::size_t> kept;
-    for (std::size_t i = 0; i < model->mode_count(); ++i)
-      if (model->damped_omega(i) < std::numbers::pi * fs) kept.push_back(i);
-    keep_modes(*model, kept);
-    if (model->mode_count() == 0)
-      throw InputError(a.bank + ": no mode lies below the Nyquist frequency at " +
-                       std::to_string(a.sample_rate) + " Hz");
+    model = std::make_unique<ModalModel>(
+        runtime::playable_model(read_soundbank(a.bank), "object", fs, a.bank));
     // Each voice keeps, per contact point, a gain for every mode: bound that before making it.
     const double gains = double(a.voices) * a.contacts * double(model->mode_count());
     if (gains > 6.4e7)

@@ -11,10 +11,10 @@
 #include <numbers>
 #include <vector>
 
+#include "chladni/core/analytic_bar.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/gpu/buffer.hpp"
-#include "chladni/precompute/analytic_bar.hpp"
 #include "chladni/runtime/cpu_filterbank.hpp"
 #include "chladni/runtime/gpu_filterbank.hpp"
 #include "chladni/runtime/render.hpp"
@@ -263,7 +263,7 @@ AudioBuffer mixed_run(Filterbank& fb, ExcitationBackend excitation, const Object
 
 TEST(Phisem, GpuExcitationAndFilterbankAgreeWithTheCpu) {
   CHLADNI_REQUIRE_GPU_OR_SKIP(ctx);
-  ModalModel model = precompute::analytic_bar({});
+  ModalModel model = analytic_bar({});
   model.name = "bar";
   const ObjectModes bar = object_modes(model);
   CpuFilterbank cpu({.capacity = 4096, .channels = 1, .threads = 2});
@@ -285,7 +285,7 @@ TEST(Phisem, GpuExcitationAndFilterbankAgreeWithTheCpu) {
 }
 
 TEST(Phisem, ObjectVoiceDrivesTheModesThroughTheContactShapes) {
-  ModalModel model = precompute::analytic_bar({});
+  ModalModel model = analytic_bar({});
   model.name = "bar";
   const ObjectModes bar = object_modes(model);
   const ShakerVoice v = object_voice(phisem_preset("gravel"), bar, 48000, 2e-3, 3, 9);
@@ -335,7 +335,7 @@ TEST(Phisem, SceneShakeEventsRenderOnBothBackendsAndNameBadInput) {
     ]})");
   const Scene scene = parse_scene(j, ".");
   ASSERT_EQ(scene.shakes.size(), 4u);
-  ModalModel bar_model = precompute::analytic_bar(scene.objects[0].bar);
+  ModalModel bar_model = analytic_bar(scene.objects[0].bar);
   bar_model.name = "bar";
   std::vector<ObjectModes> objects = {object_modes(bar_model),
                                       object_modes(scene.objects[1].modes)};

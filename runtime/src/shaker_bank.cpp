@@ -140,7 +140,7 @@ ShakerBank::ShakerBank(Filterbank& fb, const ShakerBankOptions& o)
   params_.reserve(o.max_voices);
   shakes_.resize(o.max_shakes);
   if (o.excitation == ExcitationBackend::Gpu) {
-    auto* gfb = dynamic_cast<GpuFilterbank*>(&fb);
+    GpuFilterbank* gfb = fb.device();
     if (!gfb) throw InputError("a GPU excitation needs the GPU filterbank");
     if (gfb->max_streams() < o.max_voices) {
       throw InputError("the GPU filterbank has " + std::to_string(gfb->max_streams()) +

@@ -11,6 +11,8 @@
 
 namespace chladni::runtime {
 
+class GpuFilterbank;
+
 /// An impulse added to a slot's state right after the pole multiplication at sample `offset`
 /// of the next process() call.
 struct Excitation {
@@ -84,6 +86,9 @@ class Filterbank {
   /// Reads back one slot's state (for tests and diagnostics; may be slow).
   virtual std::complex<float> state(uint32_t slot) = 0;
   virtual FilterbankTiming last_timing() const { return {}; }
+  /// The Vulkan filterbank this is (null for the CPU one): stages that feed its inputs on the
+  /// device (a GPU particle excitation) need it.
+  virtual GpuFilterbank* device() { return nullptr; }
 };
 
 /// The pole of a mode with damped angular frequency omega_d (rad/s) and decay rate d (1/s).

@@ -69,6 +69,7 @@ class GpuFilterbank final : public Filterbank {
                const DriveInput& input) override;
   std::complex<float> state(uint32_t slot) override;
   FilterbankTiming last_timing() const override { return timing_; }
+  GpuFilterbank* device() override { return this; }
 
  private:
   struct Update;

@@ -1,4 +1,4 @@
-#include "chladni/precompute/analytic_bar.hpp"
+#include "chladni/core/analytic_bar.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 
 #include "chladni/core/error.hpp"
 
-namespace chladni::precompute {
+namespace chladni {
 
 double free_free_beta_l(int n) {
   // Newton on f(x) = cos x cosh x - 1 from the asymptote (2n + 1) pi / 2.
@@ -121,4 +121,4 @@ ModalModel analytic_bar(const BarSpec& bar, int stations) {
   return m;
 }
 
-}  // namespace chladni::precompute
+}  // namespace chladni
