@@ -14,17 +14,26 @@ layout(std430, binding = 0) buffer Modes { vec4 modes[]; };
 layout(std430, binding = 1) buffer Gains { vec2 gains[]; };
 layout(std430, binding = 2) readonly buffer Updates { Update updates[]; };
 layout(std430, binding = 3) buffer Drives { uvec4 drives[]; };
-layout(std430, binding = 4) buffer Targets { vec2 targets[]; };
+layout(std430, binding = 4) buffer Targets { vec4 targets[]; };  // target gains, elapsed, 0
 
-layout(push_constant) uniform Push { uint count; } pc;
+layout(push_constant) uniform Push { uint count; uint ramp; } pc;
 
 void main() {
   const uint i = gl_GlobalInvocationID.x;
   if (i >= pc.count) return;
   const Update u = updates[i];
   if ((u.head.y & 1u) != 0u) modes[u.head.x] = u.pz;
-  if ((u.head.y & 2u) != 0u) gains[u.head.x] = uintBitsToFloat(u.head.zw);
-  if ((u.head.y & 18u) != 0u) targets[u.head.x] = uintBitsToFloat(u.head.zw);
+  const vec2 g = uintBitsToFloat(u.head.zw);
+  if ((u.head.y & 2u) != 0u) {  // at once: no ramp in flight
+    gains[u.head.x] = g;
+    targets[u.head.x] = vec4(g, float(pc.ramp), 0.0);
+  }
+  if ((u.head.y & 16u) != 0u) {  // a ramp to g, from where the current one has got to
+    const vec4 t = targets[u.head.x];
+    const float w = min(1.0, t.z / float(max(pc.ramp, 1u)));
+    gains[u.head.x] += w * (t.xy - gains[u.head.x]);
+    targets[u.head.x] = vec4(g, 0.0, 0.0);
+  }
   if ((u.head.y & 4u) != 0u) modes[u.head.x].xy = u.pz.xy;
   if ((u.head.y & 8u) != 0u) drives[u.head.x] = u.drive;
 }

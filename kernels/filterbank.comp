@@ -21,8 +21,9 @@ layout(constant_id = 3) const uint ROWS_PER_GROUP = 8;
 // Driven slots (stochastic excitation): z[n] = p z[n-1] + a x_k[n], the input term added after
 // the pole product as in the CPU reference. A separate pipeline, so undriven banks pay nothing.
 layout(constant_id = 4) const bool DRIVEN = false;
-// Gain ramps: channel c outputs g_c z + r[n] (t_c - g_c) z with r[n] = min(1, (n + 1) / ramp),
-// the ramp's share summed apart as in the CPU reference; at the end the targets become the gains.
+// Gain ramps: a mode's gain at sample n is g + w (t - g), w = min(1, (e + n + 1) / ramp), with
+// e the samples elapsed since its ramp began (as the CPU reference); a ramp that ends in this
+// call leaves its target as the gain.
 layout(constant_id = 5) const bool RAMP = false;
 
 layout(std430, binding = 0) buffer Modes { vec4 modes[]; };  // (p.re, p.im, z.re, z.im)
@@ -31,7 +32,7 @@ layout(std430, binding = 2) readonly buffer Excitations { uvec4 exc[]; };  // se
 layout(std430, binding = 3) writeonly buffer Partials { float partial[]; };
 layout(std430, binding = 4) readonly buffer Drives { uvec4 drive[]; };  // stream, a.re, a.im bits
 layout(std430, binding = 5) readonly buffer Inputs { float inputs[]; };  // stream-major rows
-layout(std430, binding = 6) readonly buffer Targets { vec2 targets[]; };  // equal gains unless ramping
+layout(std430, binding = 6) buffer Targets { vec4 targets[]; };  // target gains, elapsed, 0
 
 layout(push_constant) uniform Push {
   uint mode_count;  // slots [0, mode_count) are processed
@@ -44,7 +45,7 @@ const uint NONE = 0xffffffffu;
 
 float pr[MPI], pi[MPI], zr[MPI], zi[MPI], g0[MPI], g1[MPI];
 float ar[DRIVEN ? MPI : 1], ai[DRIVEN ? MPI : 1];
-float d0[RAMP ? MPI : 1], d1[RAMP ? MPI : 1];
+float d0[RAMP ? MPI : 1], d1[RAMP ? MPI : 1], c0[RAMP ? MPI : 1];
 uint src[DRIVEN ? MPI : 1];
 uint row_base;
 
@@ -88,19 +89,18 @@ void step(uint n) {
 // Output of sample n: sum of gain * Im(z), over the invocation, then the subgroup.
 void emit(uint n) {
   float left = 0.0, right = 0.0;
-  for (uint j = 0; j < MPI; ++j) {
-    left += g0[j] * zi[j];
-    if (CHANNELS == 2) right += g1[j] * zi[j];
-  }
   if (RAMP) {
-    float rl = 0.0, rr = 0.0;
+    const float inv = 1.0 / float(pc.ramp);
     for (uint j = 0; j < MPI; ++j) {
-      rl += d0[j] * zi[j];
-      if (CHANNELS == 2) rr += d1[j] * zi[j];
+      const float w = min(1.0, float(n) * inv + c0[j]);
+      left += (g0[j] + w * d0[j]) * zi[j];
+      if (CHANNELS == 2) right += (g1[j] + w * d1[j]) * zi[j];
     }
-    const float w = min(1.0, float(n + 1) / float(pc.ramp));
-    left += w * rl;
-    if (CHANNELS == 2) right += w * rr;
+  } else {
+    for (uint j = 0; j < MPI; ++j) {
+      left += g0[j] * zi[j];
+      if (CHANNELS == 2) right += g1[j] * zi[j];
+    }
   }
   left = subgroupAdd(left);
   if (CHANNELS == 2) right = subgroupAdd(right);
@@ -124,10 +124,11 @@ void main() {
       pr[j] = m.x; pi[j] = m.y; zr[j] = m.z; zi[j] = m.w; g0[j] = g.x; g1[j] = g.y;
     }
     if (RAMP) {
-      d0[j] = 0.0; d1[j] = 0.0;
+      d0[j] = 0.0; d1[j] = 0.0; c0[j] = 1.0;
       if (s < pc.mode_count) {
-        const vec2 t = targets[s];
-        d0[j] = t.x - g0[j]; d1[j] = t.y - g1[j];
+        const vec4 t = targets[s];
+        const float inv = 1.0 / float(pc.ramp);
+        d0[j] = t.x - g0[j]; d1[j] = t.y - g1[j]; c0[j] = t.z * inv + inv;
       }
     }
     if (DRIVEN) {
@@ -175,7 +176,16 @@ void main() {
       // Flush states far below audibility: no denormal guarantee on every device.
       if (zr[j] * zr[j] + zi[j] * zi[j] < 1e-30) { zr[j] = 0.0; zi[j] = 0.0; }
       modes[s] = vec4(pr[j], pi[j], zr[j], zi[j]);
-      if (RAMP) gains[s] = targets[s];
+      if (RAMP) {
+        const vec4 t = targets[s];
+        const float e = t.z + float(pc.samples);
+        if (e >= float(pc.ramp)) {
+          gains[s] = t.xy;
+          targets[s].z = float(pc.ramp);
+        } else {
+          targets[s].z = e;
+        }
+      }
     }
   }
 }

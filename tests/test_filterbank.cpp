@@ -111,6 +111,28 @@ TEST(Filterbank, GainChangeRampsKeepsStateAndClearSilences) {
     fb->clear_mode(3);
     fb->process({}, 256, b.data());
     for (int n = 0; n < 256; ++n) EXPECT_EQ(b[n], 0.0f);
+    // A ramp spans calls of any size, and a change in mid-ramp starts from where it has got
+    // to: 1 -> 3 from sample 0, then -> 0.5 from sample 120, in calls of 40 frames.
+    fb->set_mode(7, pole(2 * std::numbers::pi * 300, 1.0, kFs), g1);
+    const Excitation e7{7, 0, 1.0f, 0.0f};
+    fb->process(std::span(&e7, 1), 1, b.data());
+    std::complex<double> z7 = 1.0;
+    const std::complex<double> p7 = pole(2 * std::numbers::pi * 300, 1.0, kFs);
+    fb->set_gains(7, g3);
+    const float half[2] = {0.5f, 0.0f};
+    for (int n = 0; n < 480; n += 40) {
+      if (n == 120) fb->set_gains(7, half);  // the 40-frame call at 120 starts the new ramp
+      fb->process({}, 40, b.data());
+      for (int k = 0; k < 40; ++k) {
+        z7 *= p7;
+        const int m = n + k;
+        const double from = 1.0 + 2.0 * (120.0 / 256.0);
+        const double g = m < 120 ? 1.0 + 2.0 * std::min(1.0, (m + 1) / 256.0)
+                                 : from + (0.5 - from) * std::min(1.0, (m - 119) / 256.0);
+        EXPECT_NEAR(b[k], g * z7.imag(), 2e-5) << "sample " << m;
+      }
+    }
+    fb->clear_mode(7);
     // A mode started in this call takes its new gains at once: it has no sound to click.
     fb->set_mode(5, pole(2 * std::numbers::pi * 700, 1.0, kFs), g1);
     fb->set_gains(5, g3);

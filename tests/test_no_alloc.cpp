@@ -8,6 +8,7 @@
 #include <new>
 #include <numbers>
 
+#include "chladni/chladni.h"
 #include "chladni/runtime/cpu_filterbank.hpp"
 #include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/synth.hpp"
@@ -103,4 +104,50 @@ TEST(ShakerBank, ShakeRenderAndSharedSynthDoNotAllocate) {
   g_count = false;
   EXPECT_EQ(g_allocs.load(), 0);
   EXPECT_GT(bank.state(0).collisions, 0u);
+}
+
+TEST(CApi, PostingAndRenderingDoNotAllocate) {
+  // The game thread's posts and the audio thread's render, with listener moves (gain updates),
+  // impacts with contacts, and the objects' transfer-free gains, after one warm-up render.
+  chladni_config c;
+  chladni_config_default(&c);
+  c.threads = 2;
+  chladni_runtime* rt = nullptr;
+  ASSERT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK);
+  std::vector<double> hz, decay, amp;
+  for (int i = 0; i < 300; ++i) {
+    hz.push_back(60.0 + 61.0 * i);
+    decay.push_back(3.0 + i % 7);
+    amp.push_back(0.01);
+  }
+  chladni_bank* bank = nullptr;
+  ASSERT_EQ(chladni_bank_from_modes(rt, hz.data(), decay.data(), amp.data(), hz.size(), &bank),
+            CHLADNI_OK);
+  const double identity[4] = {1, 0, 0, 0}, fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1};
+  for (int k = 0; k < 4; ++k) {
+    const double at[3] = {k - 1.5, 2.0, 0.0};
+    uint32_t id = 0;
+    ASSERT_EQ(chladni_spawn(rt, bank, at, identity, 1.0, &id), CHLADNI_OK);
+  }
+  std::vector<float> out(256 * 2);
+  ASSERT_EQ(chladni_render(rt, out.data(), 256), CHLADNI_OK);  // warm-up
+  g_allocs = 0;
+  g_count = true;
+  for (int b = 0; b < 200; ++b) {
+    const double t = chladni_time(rt);
+    chladni_impact im{};
+    im.object = static_cast<uint32_t>(b % 4);
+    im.time = t + 0.001;
+    im.impulse = 0.01;
+    im.direction[2] = -1;
+    im.vertex = -1;
+    im.contact_time = b % 2 ? 0.001 : 0.0;
+    EXPECT_EQ(chladni_post_impact(rt, &im), CHLADNI_OK);
+    const double pos[3] = {0.01 * b, 0, 0};
+    EXPECT_EQ(chladni_post_listener(rt, t + 0.002, pos, fwd, up), CHLADNI_OK);
+    EXPECT_EQ(chladni_render(rt, out.data(), 256), CHLADNI_OK);
+  }
+  g_count = false;
+  EXPECT_EQ(g_allocs.load(), 0);
+  chladni_runtime_destroy(rt);
 }

@@ -74,9 +74,9 @@ CpuFilterbank::CpuFilterbank(const CpuFilterbankOptions& o)
   ai_.reset(aligned_floats(padded_));
   t0_.reset(aligned_floats(padded_));
   t1_.reset(aligned_floats(padded_));
+  el_.reset(aligned_floats(padded_));
   touch_.assign(padded_, kIdle);
   touched_.reserve(padded_);
-  ramp_.resize(max_frames_);
   src_.assign(padded_, kNoStream);
   const int threads = o.threads > 0
                           ? o.threads
@@ -123,15 +123,23 @@ void CpuFilterbank::set_input(uint32_t slot, uint32_t stream, std::complex<float
 
 void CpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
   if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
-  t0_[slot] = gains[0];
-  t1_[slot] = channels_ == 2 ? gains[1] : 0.0f;
+  const float t0 = gains[0], t1 = channels_ == 2 ? gains[1] : 0.0f;
   if (gain_ramp_ == 0 || touch_[slot] == kStarted) {
-    g0_[slot] = t0_[slot];
-    g1_[slot] = t1_[slot];
+    g0_[slot] = t0_[slot] = t0;
+    g1_[slot] = t1_[slot] = t1;
     return;
   }
-  if (touch_[slot] == kIdle) touched_.push_back(slot);
-  touch_[slot] = kRamping;
+  if (touch_[slot] == kRamping) {  // a new ramp starts from where this one has got to
+    const float w = std::min(1.0f, el_[slot] / static_cast<float>(gain_ramp_));
+    g0_[slot] += w * (t0_[slot] - g0_[slot]);
+    g1_[slot] += w * (t1_[slot] - g1_[slot]);
+  } else {
+    touched_.push_back(slot);
+    touch_[slot] = kRamping;
+  }
+  t0_[slot] = t0;
+  t1_[slot] = t1;
+  el_[slot] = 0.0f;
 }
 
 void CpuFilterbank::set_high_water(uint32_t slots) {
@@ -155,7 +163,8 @@ void CpuFilterbank::run_task(void* self_ptr, int t) {
   a.g1 = self->g1_.get();
   a.t0 = self->t0_.get();
   a.t1 = self->t1_.get();
-  a.ramp = self->ramping_ ? self->ramp_.data() : nullptr;
+  a.el = self->ramping_ ? self->el_.get() : nullptr;
+  a.inv_ramp = self->gain_ramp_ ? 1.0f / static_cast<float>(self->gain_ramp_) : 0.0f;
   a.begin = r[0];
   a.end = r[1];
   a.exc = self->sorted_.data() + r[2];
@@ -216,11 +225,6 @@ void CpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   frames_ = frames;
   ramping_ = false;
   for (uint32_t s : touched_) ramping_ = ramping_ || touch_[s] == kRamping;
-  if (ramping_) {
-    const float length = static_cast<float>(std::min(gain_ramp_, frames));
-    for (uint32_t n = 0; n < frames; ++n)
-      ramp_[n] = std::min(1.0f, static_cast<float>(n + 1) / length);
-  }
   const uint32_t active = (high_water_ + cpu::kGroup - 1) / cpu::kGroup * cpu::kGroup;
   const int tasks = pool_->threads();
   const uint32_t groups = active / cpu::kGroup;
@@ -235,12 +239,19 @@ void CpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
         std::lower_bound(sorted_.begin(), sorted_.begin() + ne, r[1], by_slot) - sorted_.begin());
   }
   pool_->run(&CpuFilterbank::run_task, this, tasks);
-  for (uint32_t s : touched_) {  // ramps are over: the targets are the gains
+  // Ramps that are over leave their targets as the gains; the others go on next call.
+  std::size_t kept = 0;
+  for (uint32_t s : touched_) {
+    if (touch_[s] == kRamping && el_[s] + static_cast<float>(frames) < gain_ramp_) {
+      el_[s] += static_cast<float>(frames);
+      touched_[kept++] = s;
+      continue;
+    }
     g0_[s] = t0_[s];
     g1_[s] = t1_[s];
     touch_[s] = kIdle;
   }
-  touched_.clear();
+  touched_.resize(kept);
   const std::size_t count = static_cast<std::size_t>(frames) * channels_;
   std::memcpy(out, task_out_.data(), count * sizeof(float));
   for (int t = 1; t < tasks; ++t) {

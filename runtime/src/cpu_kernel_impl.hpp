@@ -25,12 +25,14 @@ void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Exci
     g0[v] = S::load(a.g0 + s);
     g1[v] = CH == 2 ? S::load(a.g1 + s) : S::zero();
   }
-  // Ramping tiles: output g z + r[n] (target - g) z, the ramp's share summed apart.
-  [[maybe_unused]] V d0[RAMP ? NV : 1], d1[RAMP ? NV : 1];
+  // Ramping tiles: the gain at sample n is g + w (target - g), w = min(1, (el + n + 1) / R).
+  [[maybe_unused]] V d0[RAMP ? NV : 1], d1[RAMP ? NV : 1], c[RAMP ? NV : 1];
+  [[maybe_unused]] const V inv = S::set1(a.inv_ramp), one = S::set1(1.0f);
   if constexpr (RAMP) {
     for (int v = 0; v < NV; ++v) {
       d0[v] = S::sub(S::load(a.t0 + t0 + v * W), g0[v]);
       d1[v] = CH == 2 ? S::sub(S::load(a.t1 + t0 + v * W), g1[v]) : S::zero();
+      c[v] = S::fmadd(S::load(a.el + t0 + v * W), inv, inv);
     }
   }
   // Driven tiles: input gains, and per lane the row of its stream (nullptr when undriven).
@@ -80,19 +82,18 @@ void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Exci
   };
   auto emit = [&](uint32_t n) {
     V acc0 = S::zero(), acc1 = S::zero();
-    for (int v = 0; v < NV; ++v) {
-      acc0 = S::fmadd(g0[v], zi[v], acc0);
-      if constexpr (CH == 2) acc1 = S::fmadd(g1[v], zi[v], acc1);
-    }
     if constexpr (RAMP) {
-      V r0 = S::zero(), r1 = S::zero();
+      const V nv = S::set1(static_cast<float>(n));
       for (int v = 0; v < NV; ++v) {
-        r0 = S::fmadd(d0[v], zi[v], r0);
-        if constexpr (CH == 2) r1 = S::fmadd(d1[v], zi[v], r1);
+        const V w = S::min(one, S::fmadd(nv, inv, c[v]));
+        acc0 = S::fmadd(S::fmadd(w, d0[v], g0[v]), zi[v], acc0);
+        if constexpr (CH == 2) acc1 = S::fmadd(S::fmadd(w, d1[v], g1[v]), zi[v], acc1);
       }
-      const V w = S::set1(a.ramp[n]);
-      acc0 = S::fmadd(w, r0, acc0);
-      if constexpr (CH == 2) acc1 = S::fmadd(w, r1, acc1);
+    } else {
+      for (int v = 0; v < NV; ++v) {
+        acc0 = S::fmadd(g0[v], zi[v], acc0);
+        if constexpr (CH == 2) acc1 = S::fmadd(g1[v], zi[v], acc1);
+      }
     }
     float* l = a.lanes + static_cast<std::size_t>(n) * CH * W;
     S::store(l, S::add(S::load(l), acc0));
@@ -155,7 +156,7 @@ void run_range(const KernelArgs& a) {
       if (a.in) {
         for (uint32_t l = 0; l < T && !driven; ++l) driven = a.src[t0 + l] != kNoStream;
       }
-      if (a.ramp) {
+      if (a.el) {
         for (uint32_t l = 0; l < T && !ramp; ++l)
           ramp = a.t0[t0 + l] != a.g0[t0 + l] || (CH == 2 && a.t1[t0 + l] != a.g1[t0 + l]);
       }

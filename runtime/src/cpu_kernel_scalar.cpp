@@ -11,6 +11,7 @@ struct Scalar {
   static V set1(float x) { return x; }
   static V zero() { return 0.0f; }
   static V add(V a, V b) { return a + b; }
+  static V min(V a, V b) { return a < b ? a : b; }
   static V sub(V a, V b) { return a - b; }
   static V mul(V a, V b) { return a * b; }
   // Plain multiply-add: std::fma without hardware FMA is a slow software routine.

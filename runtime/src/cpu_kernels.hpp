@@ -17,11 +17,13 @@ struct KernelArgs {
   float* zi;
   const float* g0;
   const float* g1;
-  /// Gain ramps (nullptr `ramp`: none this call): target gains per slot (equal to g0/g1 where
-  /// nothing ramps) and the ramp's weight per sample, min(1, (n + 1) / length).
+  /// Gain ramps (nullptr `el`: none this call): target gains per slot (equal to g0/g1 where
+  /// nothing ramps) and samples elapsed since each ramp began; the weight of the target at
+  /// sample n is min(1, (el + n + 1) * inv_ramp).
   const float* t0;
   const float* t1;
-  const float* ramp;
+  const float* el;
+  float inv_ramp;
   uint32_t begin, end;  ///< slot range, multiples of kGroup (arrays are padded)
   /// Excitations with slot in [begin, end), sorted by (slot / kGroup, offset, slot).
   const Excitation* exc;

@@ -89,7 +89,7 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   modes_ = std::make_unique<gpu::Buffer>(c, mode_bytes, gpu::Memory::DeviceLocal);
   gains_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 8,
                                          gpu::Memory::DeviceLocal);
-  targets_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 8,
+  targets_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 16,
                                            gpu::Memory::DeviceLocal);
   // One spare entry: the shader may read the entry after its list.
   excitations_ = std::make_unique<gpu::Buffer>(c, (uint64_t{max_excitations_} + 1) * 16,
@@ -138,7 +138,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   reduce_ = std::make_unique<gpu::Pipeline>(c, std::span(k_reduce_spv), 2, sizeof(ReducePush));
   reduce_->bind(0, *scratch_);
   reduce_->bind(1, *result_);
-  apply_ = std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 5, sizeof(uint32_t));
+  apply_ =
+      std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 5, 2 * sizeof(uint32_t));
   apply_->bind(0, *modes_);
   apply_->bind(1, *gains_);
   apply_->bind(2, *updates_);
@@ -206,7 +207,7 @@ void GpuFilterbank::set_gains(uint32_t slot, const float gains[2]) {
     u.flags |= kGains;
   } else {
     u.flags |= kRampTo;
-    ramps_pending_ = true;
+    ramp_until_ = std::max<uint64_t>(ramp_until_, processed_ + gain_ramp_);
   }
   u.gain[0] = gains[0];
   u.gain[1] = channels_ == 2 ? gains[1] : 0.0f;
@@ -218,7 +219,8 @@ void GpuFilterbank::set_high_water(uint32_t slots) {
 
 void GpuFilterbank::record_updates() {
   if (!update_count_) return;
-  seq_->dispatch(*apply_, div_up(update_count_, 64), &update_count_, sizeof(uint32_t));
+  const uint32_t push[2] = {update_count_, gain_ramp_};
+  seq_->dispatch(*apply_, div_up(update_count_, 64), push, sizeof(push));
   seq_->barrier();
 }
 
@@ -301,7 +303,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
       if ((list[i].flags & kRampTo) && list[i].slot >= groups * group_modes)
         list[i].flags = (list[i].flags & ~kRampTo) | kGains;
   }
-  const bool ramp = ramps_pending_ && groups > 0;
+  const bool ramp = processed_ < ramp_until_ && groups > 0;
   seq_->begin();
   seq_->timestamp(0);
   record_updates();
@@ -313,7 +315,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
     seq_->fill_zero(*result_);
     seq_->barrier();
   } else {
-    const FilterbankPush fp{groups * group_modes, frames, ne, std::min(gain_ramp_, frames)};
+    const FilterbankPush fp{groups * group_modes, frames, ne, gain_ramp_};
     seq_->dispatch(*filterbank_[driven][ramp], groups, &fp, sizeof(fp));
     seq_->barrier();
     seq_->timestamp(1);
@@ -338,7 +340,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
   std::memcpy(out, result_->data(), sizeof(float) * count);
   clear_updates();
-  if (ramp) ramps_pending_ = false;
+  processed_ += frames;
 }
 
 }  // namespace chladni::runtime

@@ -85,6 +85,13 @@ void ScenePlayer::move(std::size_t k, const Vec3& position, const Quat& orientat
   dirty_ = true;
 }
 
+void ScenePlayer::remove(std::size_t k) {
+  Object& o = objects_.at(k);
+  if (o.voice < 0) return;
+  synth_.stop_voice(o.voice);
+  o.voice = -1;
+}
+
 void ScenePlayer::set_listener(const Listener& listener) {
   listener_ = listener;
   dirty_ = true;
@@ -92,12 +99,14 @@ void ScenePlayer::set_listener(const Listener& listener) {
 
 void ScenePlayer::impact(std::size_t k, const ImpactEvent& event, double start) {
   Object& o = objects_.at(k);
+  if (o.voice < 0) throw InputError("object " + std::to_string(k) + " was removed");
   update_gains();  // the modes this strike makes resident take the current gains
   impact_coupling(o.modes, event, o.coupling);
   synth_.strike(o.voice, o.coupling, start, event.contact_time);
 }
 
 void ScenePlayer::apply_gains(Object& o) {
+  if (o.voice < 0) return;
   // Listener frame: right = forward x up.
   const Vec3 right = cross(listener_.forward, listener_.up);
   const double rn = std::sqrt(dot(right, right));

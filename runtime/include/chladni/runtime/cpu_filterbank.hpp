@@ -64,14 +64,14 @@ class CpuFilterbank final : public Filterbank {
   struct AlignedFree {
     void operator()(float* p) const;
   };
-  std::unique_ptr<float[], AlignedFree> pr_, pi_, zr_, zi_, g0_, g1_, ar_, ai_, t0_, t1_;
-  // Gain ramps: targets t0_/t1_ equal g0_/g1_ except for slots listed in touched_, whose state
-  // says whether they ramp or were started this call (their gains then apply at once).
+  std::unique_ptr<float[], AlignedFree> pr_, pi_, zr_, zi_, g0_, g1_, ar_, ai_, t0_, t1_, el_;
+  // Gain ramps: a ramping slot goes from g0_/g1_ to its targets t0_/t1_ over gain_ramp_ samples,
+  // el_ of them elapsed; elsewhere the targets equal the gains. touched_ lists the slots that
+  // ramp or were started in this call (their gains apply at once).
   enum : uint8_t { kIdle = 0, kRamping = 1, kStarted = 2 };
   uint32_t gain_ramp_;
   std::vector<uint8_t> touch_;
   std::vector<uint32_t> touched_;
-  std::vector<float> ramp_;    // per sample of a call: min(1, (n + 1) / length)
   std::vector<uint32_t> src_;  // input stream per slot, kNoStream when undriven
   uint32_t driven_ = 0;        // slots with a stream
   DriveInput input_;

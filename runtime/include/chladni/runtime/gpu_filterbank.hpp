@@ -86,7 +86,9 @@ class GpuFilterbank final : public Filterbank {
   std::unique_ptr<gpu::Pipeline> filterbank_[2][2];  // [driven][ramp]
   std::unique_ptr<gpu::Pipeline> reduce_, apply_;
   uint32_t gain_ramp_;
-  bool ramps_pending_ = false;    // targets on the device differ from the gains
+  // Samples processed, and the sample by which every ramp begun so far has ended: the ramping
+  // kernel runs until then.
+  uint64_t processed_ = 0, ramp_until_ = 0;
   std::vector<uint32_t> stream_;  // per slot, host mirror of the drive's stream
   uint32_t driven_ = 0;
   GpuInputStage* stage_ = nullptr;

@@ -46,6 +46,9 @@ class ScenePlayer {
   /// share its coefficients and maps. Control thread.
   std::size_t add_object(const ObjectModes& modes, const Vec3& position, const Quat& orientation,
                          double gain = 1.0);
+  /// Silences an object at once (its slots are freed) and ignores it from then on.
+  void remove(std::size_t object);
+  bool active(std::size_t object) const { return objects_.at(object).voice >= 0; }
   /// Prepares the listener-gain tables for the objects added so far (maps, device buffers);
   /// done by the first update otherwise. Control thread.
   void finish_objects();
@@ -73,6 +76,12 @@ class ScenePlayer {
   Synth& synth() { return synth_; }
   const Synth& synth() const { return synth_; }
   std::size_t object_count() const { return objects_.size(); }
+  std::size_t mode_count(std::size_t object) const { return objects_.at(object).gains.size(); }
+  /// Surface points an impact may name by vertex (0 without geometry).
+  std::size_t points(std::size_t object) const {
+    const ObjectModes& m = objects_.at(object).modes;
+    return m.model && m.model->has_geometry() ? m.model->points.size() : 0;
+  }
   uint64_t gain_updates() const { return gain_updates_; }
   double gain_seconds() const { return gain_seconds_; }
   /// "cpu", "gpu" or "" when no object has transfer.

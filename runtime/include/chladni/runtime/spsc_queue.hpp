@@ -1,0 +1,58 @@
+#pragma once
+// A bounded single-producer single-consumer queue: one thread pushes (a game thread), one pops
+// (the audio thread); neither allocates, locks or waits. Storage is fixed at construction.
+#include <atomic>
+#include <cstddef>
+#include <memory>
+#include <new>
+#include <stdexcept>
+
+namespace chladni::runtime {
+
+template <class T>
+class SpscQueue {
+ public:
+  /// Holds up to `capacity` items (rounded up to a power of two).
+  explicit SpscQueue(std::size_t capacity) {
+    if (capacity == 0 || capacity > (std::size_t{1} << 30))
+      throw std::invalid_argument("queue capacity must be in [1, 2^30]");
+    std::size_t n = 1;
+    while (n < capacity) n <<= 1;
+    mask_ = n - 1;
+    items_ = std::make_unique<T[]>(n);
+  }
+  /// Producer: false (and nothing queued) when full.
+  bool push(const T& item) {
+    const std::size_t tail = tail_.load(std::memory_order_relaxed);
+    if (tail - head_cache_ > mask_) {
+      head_cache_ = head_.load(std::memory_order_acquire);
+      if (tail - head_cache_ > mask_) return false;
+    }
+    items_[tail & mask_] = item;
+    tail_.store(tail + 1, std::memory_order_release);
+    return true;
+  }
+  /// Consumer: the oldest item, or null when empty. Stays valid until pop().
+  const T* front() {
+    const std::size_t head = head_.load(std::memory_order_relaxed);
+    if (head == tail_cache_) {
+      tail_cache_ = tail_.load(std::memory_order_acquire);
+      if (head == tail_cache_) return nullptr;
+    }
+    return &items_[head & mask_];
+  }
+  /// Consumer: drops the item front() returned.
+  void pop() { head_.store(head_.load(std::memory_order_relaxed) + 1, std::memory_order_release); }
+  std::size_t capacity() const { return mask_ + 1; }
+
+ private:
+  std::unique_ptr<T[]> items_;
+  std::size_t mask_ = 0;
+  // Each side's index on its own cache line, with its cached view of the other side's.
+  alignas(64) std::atomic<std::size_t> head_{0};
+  std::size_t tail_cache_ = 0;
+  alignas(64) std::atomic<std::size_t> tail_{0};
+  std::size_t head_cache_ = 0;
+};
+
+}  // namespace chladni::runtime

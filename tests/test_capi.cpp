@@ -1,0 +1,206 @@
+// The C API against the offline renderer: the same objects, impacts and listener move give the
+// same samples; the queue's limits and bad input give status codes and messages.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "chladni/chladni.h"
+#include "chladni/core/material.hpp"
+#include "chladni/core/scene.hpp"
+#include "chladni/core/soundbank.hpp"
+#include "chladni/runtime/cpu_filterbank.hpp"
+#include "chladni/runtime/render.hpp"
+#include "test_support.hpp"
+
+using namespace chladni;
+
+namespace {
+
+struct Runtime {
+  explicit Runtime(uint32_t queue = 4096) {
+    chladni_config c;
+    chladni_config_default(&c);
+    c.threads = 1;
+    c.queue_capacity = queue;
+    EXPECT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();
+  }
+  ~Runtime() { chladni_runtime_destroy(rt); }
+  chladni_runtime* rt = nullptr;
+};
+
+const std::vector<InlineMode> kBowl = {{441, 2.0, 0.02}, {1142, 3.0, 0.01}, {2650, 5.0, 0.004}};
+const std::vector<InlineMode> kBar = {{576.5, 4.0, 0.01}, {1589, 7.0, 0.006}};
+
+chladni_bank* bank(chladni_runtime* rt, const std::vector<InlineMode>& modes) {
+  std::vector<double> f, d, a;
+  for (const InlineMode& m : modes) {
+    f.push_back(m.frequency);
+    d.push_back(m.decay);
+    a.push_back(m.amplitude);
+  }
+  chladni_bank* b = nullptr;
+  EXPECT_EQ(chladni_bank_from_modes(rt, f.data(), d.data(), a.data(), f.size(), &b), CHLADNI_OK);
+  return b;
+}
+
+}  // namespace
+
+TEST(CApi, RendersWhatTheOfflineRendererDoes) {
+  // Two objects, three impacts (one with a contact), and the listener stepping closer at a
+  // block boundary (512 / 48 kHz), where both apply moves.
+  Scene scene;
+  scene.channels = 2;
+  scene.duration = 0.5;
+  SceneObject bowl, bar;
+  bowl.name = "bowl";
+  bowl.position = {0.3, 1.0, 0};
+  bowl.modes = kBowl;
+  bar.name = "bar";
+  bar.position = {-0.5, 2.0, 0};
+  bar.modes = kBar;
+  scene.objects = {bowl, bar};
+  const double times[3] = {0.0101, 0.0333, 0.2}, impulses[3] = {0.01, 0.02, 0.005},
+               contacts[3] = {0.0008, 0.0, 0.002};
+  const std::size_t which[3] = {0, 1, 0};
+  for (int k = 0; k < 3; ++k) {
+    ImpactEvent e;
+    e.time = times[k];
+    e.object = which[k];
+    e.impulse = impulses[k];
+    e.contact_time = contacts[k];
+    scene.events.push_back(e);
+  }
+  MoveEvent step;
+  step.time = 512.0 * 40 / 48000;
+  step.position = Vec3{0, 0.6, 0};
+  scene.moves = {step};
+  std::vector<runtime::ObjectModes> objects{runtime::object_modes(scene.objects[0].modes),
+                                            runtime::object_modes(scene.objects[1].modes)};
+  runtime::CpuFilterbank fb({.capacity = 65536, .channels = 2, .threads = 1});
+  const AudioBuffer ref = runtime::render_scene(scene, objects, fb, {});
+
+  Runtime r;
+  chladni_bank* banks[2] = {bank(r.rt, kBowl), bank(r.rt, kBar)};
+  const double identity[4] = {1, 0, 0, 0};
+  for (int k = 0; k < 2; ++k) {
+    uint32_t id = 0;
+    const Vec3& p = scene.objects[k].position;
+    ASSERT_EQ(chladni_spawn(r.rt, banks[k], p.data(), identity, 1.0, &id), CHLADNI_OK);
+    EXPECT_EQ(id, uint32_t(k));
+  }
+  for (int k = 0; k < 3; ++k) {
+    chladni_impact im{};
+    im.object = static_cast<uint32_t>(which[k]);
+    im.time = times[k];
+    im.impulse = impulses[k];
+    im.direction[2] = -1;
+    im.vertex = -1;
+    im.contact_time = contacts[k];
+    ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  }
+  const double fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1};
+  ASSERT_EQ(chladni_post_listener(r.rt, step.time, step.position->data(), fwd, up), CHLADNI_OK);
+  // An engine's callback size, unrelated to the runtime's block.
+  std::vector<float> out(ref.samples.size());
+  for (std::size_t n = 0; n < ref.frames(); n += 480)
+    ASSERT_EQ(chladni_render(r.rt, out.data() + 2 * n, 480), CHLADNI_OK) << chladni_last_error();
+  const double peak = test::max_abs(ref.samples);
+  ASSERT_GT(peak, 1e-4);
+  EXPECT_LT(test::max_diff(ref.samples, out), 1e-6 * peak);
+}
+
+TEST(CApi, RefusesBadInputAndAFullQueue) {
+  Runtime r(4);
+  chladni_bank* b = bank(r.rt, kBowl);
+  const double origin[3] = {0, 1, 0}, identity[4] = {1, 0, 0, 0}, zero[4] = {0, 0, 0, 0};
+  uint32_t id = 0;
+  EXPECT_EQ(chladni_spawn(r.rt, b, origin, zero, 1.0, &id), CHLADNI_INPUT_ERROR);
+  EXPECT_NE(std::string(chladni_last_error()).find("orientation"), std::string::npos);
+  ASSERT_EQ(chladni_spawn(r.rt, b, origin, identity, 1.0, &id), CHLADNI_OK);
+  chladni_impact im{};
+  im.object = id;
+  im.impulse = 0.01;
+  im.direction[2] = -1;
+  im.vertex = 3;  // inline modes have no surface points
+  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_INPUT_ERROR);
+  EXPECT_NE(std::string(chladni_last_error()).find("vertex 3 is out of range"), std::string::npos);
+  im.vertex = -1;
+  im.contact_time = INFINITY;
+  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_INPUT_ERROR);
+  im.contact_time = 0;
+  // The queue holds 4 commands between renders; the fifth waits for a render.
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_QUEUE_FULL);
+  std::vector<float> out(256 * 2);
+  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  EXPECT_GT(test::max_abs(out), 0.0);
+  // A removed object is silent at once and refuses commands.
+  ASSERT_EQ(chladni_remove(r.rt, id), CHLADNI_OK);
+  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  EXPECT_EQ(test::max_abs(out), 0.0);
+  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_INPUT_ERROR);
+  chladni_config c;
+  chladni_config_default(&c);
+  c.channels = 3;
+  chladni_runtime* bad = nullptr;
+  EXPECT_EQ(chladni_runtime_create(&c, &bad), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(bad, nullptr);
+  EXPECT_NE(std::string(chladni_last_error()).find("channels"), std::string::npos);
+}
+
+TEST(CApi, PlaysASoundbankFromFileOrMemoryStruckAtAVertex) {
+  // A tetrahedron with two modes: every vertex moves along x in mode 0, along y in mode 1.
+  Soundbank sb;
+  sb.metadata_json = R"({"source":"test"})";
+  sb.material = find_material("steel");
+  sb.omega = {2 * M_PI * 440, 2 * M_PI * 1000.5};
+  sb.decay = {3.5, 12.25};
+  sb.residual = {1e-9f, 2e-8f};
+  sb.vertices = {{0, 0, 0}, {0.1f, 0, 0}, {0, 0.1f, 0}, {0, 0, 0.1f}};
+  sb.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const float s = float(1 / std::sqrt(3.0));
+  sb.normals = {{-s, -s, -s}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  for (int mode = 0; mode < 2; ++mode)
+    for (int v = 0; v < 4; ++v)
+      for (int c = 0; c < 3; ++c) sb.shapes.push_back(c == mode ? 1.0f : 0.0f);
+  const std::string path = test::temp_path("capi_tetra.chbank");
+  write_soundbank(path, sb);
+  const std::vector<uint8_t> bytes = serialize_soundbank(sb);
+
+  Runtime r;
+  chladni_bank* from_file = nullptr;
+  chladni_bank* from_memory = nullptr;
+  ASSERT_EQ(chladni_bank_load_file(r.rt, path.c_str(), &from_file), CHLADNI_OK)
+      << chladni_last_error();
+  ASSERT_EQ(chladni_bank_load_memory(r.rt, bytes.data(), bytes.size(), &from_memory), CHLADNI_OK)
+      << chladni_last_error();
+  EXPECT_EQ(chladni_bank_point_count(from_file), 4u);
+  EXPECT_EQ(chladni_bank_mode_count(from_memory), 2u);
+  const double at[3] = {0, 0.5, 0}, identity[4] = {1, 0, 0, 0};
+  uint32_t id = 0;
+  ASSERT_EQ(chladni_spawn(r.rt, from_file, at, identity, 1.0, &id), CHLADNI_OK);
+  // Struck along x: only mode 0 (440 Hz) moves.
+  chladni_impact im{};
+  im.object = id;
+  im.impulse = 0.01;
+  im.direction[0] = 1;
+  im.vertex = 1;
+  ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  std::vector<float> out(4800 * 2);
+  ASSERT_EQ(chladni_render(r.rt, out.data(), 4800), CHLADNI_OK);
+  std::vector<float> left(4800);
+  for (int n = 0; n < 4800; ++n) left[n] = out[2 * n];
+  EXPECT_GT(test::max_abs(left), 0.0);
+  int crossings = 0;  // 440 Hz over 0.1 s: 88 zero crossings
+  for (int n = 1; n < 4800; ++n) crossings += (left[n - 1] < 0) != (left[n] < 0);
+  EXPECT_NEAR(crossings, 88, 2);
+  // Damaged bytes are refused with the section named.
+  std::vector<uint8_t> bad = bytes;
+  bad.resize(bad.size() / 2);
+  chladni_bank* broken = nullptr;
+  EXPECT_EQ(chladni_bank_load_memory(r.rt, bad.data(), bad.size(), &broken), CHLADNI_INPUT_ERROR);
+  EXPECT_NE(std::string(chladni_last_error()).find("memory"), std::string::npos)
+      << chladni_last_error();
+}
