@@ -14,7 +14,7 @@
 #include "chladni/gpu/sequence.hpp"
 #include "chladni/kernels/phisem.spv.h"
 #include "chladni/runtime/gpu_filterbank.hpp"
-#include "chladni/runtime/render.hpp"
+#include "chladni/runtime/object_modes.hpp"
 
 namespace chladni::runtime {
 namespace {

@@ -11,6 +11,7 @@
 #include "chladni/core/modal_model.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/runtime/filterbank.hpp"
+#include "chladni/runtime/object_modes.hpp"
 #include "chladni/runtime/shaker_bank.hpp"
 #include "chladni/runtime/synth.hpp"
 
@@ -19,27 +20,6 @@ class Context;
 }
 
 namespace chladni::runtime {
-
-/// What a scene object sounds like: its modes, and how an impact excites them.
-struct ObjectModes {
-  std::vector<ModeSpec> modes;  ///< damped angular frequency, decay, gain at 1 m
-  /// Complex state kick per mode for an impact; filled by impact_coupling().
-  const ModalModel* model = nullptr;  ///< geometry-backed objects
-  const std::vector<InlineMode>* inline_modes = nullptr;
-  /// Per-mode transfer (the model's, when it has one): gains then come from it, not from `gain`.
-  const Transfer* transfer = nullptr;
-};
-
-/// Builds the voice description of a modal model: gain_i = radiation_i * omega_d^2 (pressure from
-/// modal acceleration at 1 m).
-ObjectModes object_modes(const ModalModel& model);
-/// Inline modes: amplitude is the pressure at 1 m per N*s of impulse.
-ObjectModes object_modes(const std::vector<InlineMode>& modes);
-
-/// Per-mode state kick of an impact's whole impulse (Synth::strike() spreads it over the
-/// contact time).
-void impact_coupling(const ObjectModes& object, const ImpactEvent& event,
-                     std::vector<std::complex<float>>& out);
 
 /// The shaker voices a scene's shake events need: one per (object, instrument, resonance choice,
 /// particle count, impulse), voice v seeded with seed + v; `voice[e]` is scene.shakes[e]'s.

@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# The installed package serves an engine: cmake --install into a temporary prefix, then the
+# embedding examples built out of tree with find_package(Chladni) and with pkg-config, and run.
+# Usage: install_test.sh BUILD_DIR SOURCE_DIR
+set -euo pipefail
+build=$1 src=$2
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+cmake --install "$build" --prefix "$tmp/prefix" > "$tmp/install.log"
+test -x "$tmp/prefix/bin/chladni"
+test -f "$tmp/prefix/include/chladni/chladni.h"
+if find "$tmp/prefix" -iname '*tetgen*' -o -iname '*cgal*' -o -iname '*precompute*' | grep -q .; then
+  echo "the package must not carry the precompute side (TetGen, CGAL)" >&2
+  exit 1
+fi
+cmake -S "$src/examples/embedding" -B "$tmp/embed" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$tmp/prefix" > "$tmp/configure.log"
+cmake --build "$tmp/embed" > "$tmp/build.log"
+"$tmp/embed/minimal_c"
+"$tmp/embed/minimal_cpp"
+# pkg-config, from C, as a Makefile would.
+PKG_CONFIG_PATH=$(dirname "$(find "$tmp/prefix" -name chladni.pc)")
+export PKG_CONFIG_PATH
+cc -std=c11 -c "$src/examples/embedding/minimal.c" $(pkg-config --cflags chladni) -o "$tmp/m.o"
+c++ "$tmp/m.o" $(pkg-config --libs chladni) -o "$tmp/minimal_pc"
+"$tmp/minimal_pc"
+echo "installed package: find_package and pkg-config builds run"
