@@ -126,6 +126,7 @@ int main(int argc, char** argv) try {
   for (double x : ms) mean += x;
   mean /= double(ms.size());
   const double p99 = sorted[sorted.size() * 99 / 100], worst = sorted.back();
+  const auto worst_block = std::max_element(ms.begin(), ms.end()) - ms.begin();
   const double budget = 1e3 * block_s;
   std::printf(
       "%s: %u objects x %u modes, %.0f impacts/s (%llu posted, %llu refused: queue full), "
@@ -134,9 +135,9 @@ int main(int argc, char** argv) try {
       static_cast<unsigned long long>(impacts), static_cast<unsigned long long>(full), a.block,
       budget);
   std::printf(
-      "render per block: mean %.3f ms, p99 %.3f ms, worst %.3f ms (%.1fx real time on "
-      "the mean, %llu blocks over budget)\n",
-      mean, p99, worst, budget / mean,
+      "render per block: mean %.3f ms, p99 %.3f ms, worst %.3f ms at block %lld (%.1fx real "
+      "time on the mean, %llu blocks over budget)\n",
+      mean, p99, worst, static_cast<long long>(worst_block), budget / mean,
       static_cast<unsigned long long>(
           std::count_if(ms.begin(), ms.end(), [&](double x) { return x > budget; })));
   if (!a.json.empty()) {
