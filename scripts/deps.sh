@@ -3,6 +3,9 @@
 # Idempotent; needs root (or sudo) on Debian 12.
 set -euo pipefail
 
+# jackd2 (the JACK server `chladni play` is tested against) and libjack-jackd2-dev: named so that
+# apt satisfies libstk-dev's JACK dependency with JACK 2 instead of JACK 1, which conflicts with
+# the server.
 PACKAGES=(
   build-essential cmake ninja-build pkg-config git
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
@@ -11,6 +14,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libstk-dev
   zlib1g-dev libfftw3-dev libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
   libhmat-oss-dev
+  librtaudio-dev libjack-jackd2-dev jackd2
   clang-format clang libclang-rt-14-dev llvm
 )
 
