@@ -51,6 +51,7 @@ struct ExitCode {
 
 // Each adds its subcommand to `app`; the callback runs it (errors propagate as exceptions).
 void add_render(CLI::App& app);
+void add_play(CLI::App& app);
 void add_bench(CLI::App& app);
 void add_devices(CLI::App& app);
 /// `run` false: parse and check the options only (the batch checks its manifests so).

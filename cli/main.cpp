@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   chladni::cli::add_radiate(app);
   chladni::cli::add_paper(app);
   chladni::cli::add_render(app);
+  chladni::cli::add_play(app);
   chladni::cli::add_shake(app);
   chladni::cli::add_bench(app);
   chladni::cli::add_devices(app);
