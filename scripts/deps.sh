@@ -14,7 +14,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libstk-dev
   zlib1g-dev libfftw3-dev libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
   libhmat-oss-dev
-  librtaudio-dev libjack-jackd2-dev jackd2
+  librtaudio-dev libjack-jackd2-dev jackd2 libbullet-dev
   clang-format clang libclang-rt-14-dev llvm
 )
 

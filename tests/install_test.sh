@@ -24,4 +24,12 @@ export PKG_CONFIG_PATH
 cc -std=c11 -c "$src/examples/embedding/minimal.c" $(pkg-config --cflags chladni) -o "$tmp/m.o"
 c++ "$tmp/m.o" $(pkg-config --libs chladni) -o "$tmp/minimal_pc"
 "$tmp/minimal_pc"
-echo "installed package: find_package and pkg-config builds run"
+# The example host (Bullet): its first sound starts with its first impact, within 1 ms.
+cmake -S "$src/examples/falling-objects" -B "$tmp/falling" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$tmp/prefix" > "$tmp/falling-configure.log"
+cmake --build "$tmp/falling" > "$tmp/falling-build.log"
+(cd "$tmp" && "$tmp/falling/falling_objects" --seconds 2 -o f.wav --log f.csv) | tee "$tmp/f.out"
+test "$(wc -l < "$tmp/f.csv")" -gt 4
+awk '/first impact at/ { i = $(NF-9); s = $(NF-4); d = s - i; if (i < 0 || d < 0 || d > 0.001) exit 1 }' \
+  "$tmp/f.out"
+echo "installed package: find_package and pkg-config builds run, and so does the Bullet host"

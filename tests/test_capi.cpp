@@ -178,6 +178,14 @@ TEST(CApi, PlaysASoundbankFromFileOrMemoryStruckAtAVertex) {
       << chladni_last_error();
   EXPECT_EQ(chladni_bank_point_count(from_file), 4u);
   EXPECT_EQ(chladni_bank_mode_count(from_memory), 2u);
+  // The tetrahedron's volume (0.1^3 / 6) times steel's density.
+  EXPECT_NEAR(chladni_bank_mass(from_memory), 1e-3 / 6 * find_material("steel").density, 1e-6);
+  double lo[3], hi[3];
+  ASSERT_EQ(chladni_bank_bounds(from_file, lo, hi), CHLADNI_OK);
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(lo[c], 0.0, 1e-7);
+    EXPECT_NEAR(hi[c], 0.1, 1e-7);
+  }
   const double at[3] = {0, 0.5, 0}, identity[4] = {1, 0, 0, 0};
   uint32_t id = 0;
   ASSERT_EQ(chladni_spawn(r.rt, from_file, at, identity, 1.0, &id), CHLADNI_OK);

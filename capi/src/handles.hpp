@@ -56,6 +56,7 @@ struct chladni_bank {
   std::unique_ptr<chladni::ModalModel> model;  // soundbanks
   std::vector<chladni::InlineMode> inline_modes;
   chladni::runtime::ObjectModes modes;
+  double mass = 0;  // kg: the surface's volume times the density (0 for inline modes)
 };
 
 struct chladni_runtime {

@@ -1,4 +1,5 @@
 // Banks, objects and the command queue's producer side.
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -39,8 +40,23 @@ chladni_bank* keep(chladni_runtime* rt, std::unique_ptr<chladni_bank> bank) {
   return rt->banks.back().get();
 }
 
+// Volume enclosed by the bank's surface (divergence theorem over its triangles) times density.
+double solid_mass(const Soundbank& bank) {
+  double six_v = 0;
+  for (const auto& t : bank.triangles) {
+    const auto& a = bank.vertices[t[0]];
+    const auto& b = bank.vertices[t[1]];
+    const auto& c = bank.vertices[t[2]];
+    six_v += double(a[0]) * (double(b[1]) * c[2] - double(b[2]) * c[1]) -
+             double(a[1]) * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
+             double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0]);
+  }
+  return std::abs(six_v) / 6 * bank.material.density;
+}
+
 chladni_bank* bank_of(chladni_runtime* rt, Soundbank&& bank, const std::string& origin) {
   auto b = std::make_unique<chladni_bank>();
+  b->mass = solid_mass(bank);
   b->model =
       std::make_unique<ModalModel>(playable_model(bank, origin, rt->config.sample_rate, origin));
   b->modes = object_modes(*b->model);
@@ -111,6 +127,29 @@ size_t chladni_bank_mode_count(const chladni_bank* bank) {
 
 size_t chladni_bank_point_count(const chladni_bank* bank) {
   return bank && bank->model ? bank->model->points.size() : 0;
+}
+
+chladni_status chladni_bank_bounds(const chladni_bank* bank, double lo[3], double hi[3]) {
+  return capi::guarded("chladni_bank_bounds", [&] {
+    if (!bank || !lo || !hi) throw InputError("bank, min and max must not be null");
+    if (!bank->model || bank->model->points.empty())
+      throw InputError("the bank has no surface points (inline modes)");
+    for (int c = 0; c < 3; ++c) {
+      lo[c] = bank->model->points[0][c];
+      hi[c] = lo[c];
+    }
+    for (const Vec3& p : bank->model->points) {
+      for (int c = 0; c < 3; ++c) {
+        lo[c] = std::min(lo[c], p[c]);
+        hi[c] = std::max(hi[c], p[c]);
+      }
+    }
+    return CHLADNI_OK;
+  });
+}
+
+double chladni_bank_mass(const chladni_bank* bank) {
+  return bank ? bank->mass : 0.0;
 }
 
 chladni_status chladni_spawn(chladni_runtime* rt, chladni_bank* bank, const double position[3],

@@ -73,6 +73,12 @@ chladni_status chladni_bank_from_modes(chladni_runtime* runtime, const double* f
                                        chladni_bank** out);
 size_t chladni_bank_mode_count(const chladni_bank* bank);
 size_t chladni_bank_point_count(const chladni_bank* bank); /* surface points (0: inline) */
+/* The axis-aligned box of a bank's surface points in its own frame (m), for a collision shape.
+ * CHLADNI_INPUT_ERROR for a bank without geometry (inline modes). */
+chladni_status chladni_bank_bounds(const chladni_bank* bank, double min[3], double max[3]);
+/* The solid's mass (kg): its closed surface's volume times the material's density, for a
+ * rigid body. 0 for inline modes. */
+double chladni_bank_mass(const chladni_bank* bank);
 
 /* An instance of a bank at a pose (position in m; orientation a unit quaternion w, x, y, z,
  * object frame to world) with a gain; `object` receives its index. Control call. */
