@@ -18,8 +18,9 @@
 #include "chladni/runtime/cpu_filterbank.hpp"
 #include "chladni/runtime/gpu_filterbank.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
-#include "chladni/runtime/paper_scenarios.hpp"
 #include "chladni/runtime/paper_synth.hpp"
+#include "chladni/tools/paper_db_generate.hpp"
+#include "chladni/tools/paper_scenarios.hpp"
 
 using namespace chladni;
 
@@ -53,7 +54,7 @@ int main(int argc, char** argv) {
     }
   }
   const auto g0 = std::chrono::steady_clock::now();
-  const runtime::PaperSoundDb db = runtime::generate_paper_database({});
+  const runtime::PaperSoundDb db = tools::generate_paper_database({});
   std::printf("default database generated in %.2f s\n",
               std::chrono::duration<double>(std::chrono::steady_clock::now() - g0).count());
   runtime::CpuFilterbankOptions co;
@@ -71,12 +72,12 @@ int main(int argc, char** argv) {
     std::printf("gpu: %s\n", gpu->name().c_str());
   }
   // Each scenario and size once, for both tables (the 20k ones take a while to generate).
-  std::vector<std::pair<std::string, runtime::PaperScenario>> scenarios;
-  for (const std::string& name : runtime::paper_scenario_names())
+  std::vector<std::pair<std::string, tools::PaperScenario>> scenarios;
+  for (const std::string& name : tools::paper_scenario_names())
     for (std::uint32_t tris : sizes) {
-      runtime::PaperScenarioOptions o;
+      tools::PaperScenarioOptions o;
       o.triangles = tris;
-      scenarios.emplace_back(name, runtime::make_paper_scenario(name, o));
+      scenarios.emplace_back(name, tools::make_paper_scenario(name, o));
     }
   nlohmann::json rows = nlohmann::json::array();
   nlohmann::json synth_rows = nlohmann::json::array();

@@ -17,8 +17,9 @@
 #include "chladni/core/paper_animation.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
 #include "chladni/runtime/paper_database.hpp"
-#include "chladni/runtime/paper_scenarios.hpp"
 #include "chladni/runtime/paper_synth.hpp"
+#include "chladni/tools/paper_db_generate.hpp"
+#include "chladni/tools/paper_scenarios.hpp"
 #include "commands.hpp"
 #include "paper_db_cache.hpp"
 #include "progress.hpp"
@@ -29,16 +30,16 @@ namespace {
 
 struct GenArgs {
   std::string name, dir;
-  runtime::PaperScenarioOptions options;
+  tools::PaperScenarioOptions options;
   bool binary = false;
 };
 
 void run_gen(const GenArgs& a) {
   std::vector<std::string> names{a.name};
-  if (a.name == "all") names = runtime::paper_scenario_names();
+  if (a.name == "all") names = tools::paper_scenario_names();
   std::filesystem::create_directories(a.dir);
   for (const std::string& n : names) {
-    const runtime::PaperScenario s = runtime::make_paper_scenario(n, a.options);
+    const tools::PaperScenario s = tools::make_paper_scenario(n, a.options);
     const std::string path = (std::filesystem::path(a.dir) / (n + ".json")).string();
     write_paper_animation(path, s.animation,
                           a.binary ? PaperFrameStorage::Binary : PaperFrameStorage::Obj);
@@ -172,7 +173,7 @@ void run_analyze(const AnalyzeArgs& a) {
 
 struct DbArgs {
   std::string dir;
-  runtime::PaperDbOptions options;
+  tools::PaperDbOptions options;
   double friction_seconds = 1.0;
 };
 
@@ -181,9 +182,9 @@ void run_db_generate(const DbArgs& a) {
   ProgressBar progress(false);
   progress.stage("sheet modes, clips and spectra");
   const runtime::PaperSoundDb db =
-      runtime::generate_paper_database(a.options, [&](double f) { progress.fraction(f); });
+      tools::generate_paper_database(a.options, [&](double f) { progress.fraction(f); });
   progress.finish();
-  runtime::write_paper_database(a.dir, db, a.friction_seconds, a.options.seed);
+  tools::write_paper_database(a.dir, db, a.friction_seconds, a.options.seed);
   std::size_t clips = 0, spectra = 0;
   for (const auto& e : db.entries) {
     clips += e.crumple.size();

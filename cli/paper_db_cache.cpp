@@ -16,6 +16,7 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
+#include "chladni/tools/paper_db_generate.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -235,7 +236,7 @@ runtime::PaperSoundDb default_paper_database(const std::filesystem::path& dir, s
       why = std::string("; the cached copy was unusable (") + e.what() + ")";
     }
   }
-  runtime::PaperSoundDb db = runtime::generate_paper_database({});
+  runtime::PaperSoundDb db = tools::generate_paper_database({});
   char took[64];
   std::snprintf(took, sizeof took, "%.1f s", seconds());
   note = std::string("generated the default paper sound database (") + took + why + ")";

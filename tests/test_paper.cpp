@@ -14,7 +14,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/paper_animation.hpp"
 #include "chladni/runtime/paper_analysis.hpp"
-#include "chladni/runtime/paper_scenarios.hpp"
+#include "chladni/tools/paper_scenarios.hpp"
 #include "cli_support.hpp"
 #include "paper_fixtures.hpp"
 #include "test_support.hpp"
@@ -125,9 +125,9 @@ TEST(PaperMesh, CylinderCurvatureAndRulingsMatchTheAnalyticValues) {
 
 TEST(PaperAnalysis, FlapSnapsAreCrumplesOfTheWholeSheetAtTheirFrames) {
   for (std::uint32_t tris : {200u, 2000u}) {
-    runtime::PaperScenarioOptions o;
+    tools::PaperScenarioOptions o;
     o.triangles = tris;
-    const auto s = runtime::make_paper_scenario("flap", o);
+    const auto s = tools::make_paper_scenario("flap", o);
     const auto got = crumple_frames(s.animation);
     ASSERT_EQ(got.size(), s.event_frames.size()) << tris << " triangles";
     for (std::size_t k = 0; k < got.size(); ++k)
@@ -150,7 +150,7 @@ TEST(PaperAnalysis, FlapSnapsAreCrumplesOfTheWholeSheetAtTheirFrames) {
 }
 
 TEST(PaperAnalysis, ShakeReversalsAreCrumplesAtTheTurningPoints) {
-  const auto s = runtime::make_paper_scenario("shake", {});
+  const auto s = tools::make_paper_scenario("shake", {});
   const auto got = crumple_frames(s.animation);
   ASSERT_EQ(got.size(), s.event_frames.size());
   for (std::size_t k = 0; k < got.size(); ++k)
@@ -158,7 +158,7 @@ TEST(PaperAnalysis, ShakeReversalsAreCrumplesAtTheTurningPoints) {
 }
 
 TEST(PaperAnalysis, SlidingSheetRubsTheTableAndItsCurlResonates) {
-  const auto s = runtime::make_paper_scenario("slide", {});
+  const auto s = tools::make_paper_scenario("slide", {});
   PaperAnalyzer an(s.animation);
   double first_lc = -1, last_lc = 0, last_lr = 0;
   for (std::uint32_t f = 0; f < s.animation.frame_count(); ++f) {
@@ -191,9 +191,9 @@ TEST(PaperAnalysis, SlidingSheetRubsTheTableAndItsCurlResonates) {
 }
 
 TEST(PaperAnalysis, CrumpleEventsFallAtTheSnapsOfItsBumps) {
-  runtime::PaperScenarioOptions o;
+  tools::PaperScenarioOptions o;
   o.triangles = 2000;
-  const auto s = runtime::make_paper_scenario("crumple", o);
+  const auto s = tools::make_paper_scenario("crumple", o);
   const auto got = crumple_frames(s.animation);
   double peak = 0;
   for (const auto& [f, amp] : got) peak = std::max(peak, amp);
@@ -255,10 +255,10 @@ TEST(PaperAnalysis, RidgesAndAnchorsStopTheVibration) {
 }
 
 TEST(PaperFormat, ObjAndBinaryFramesRoundTrip) {
-  runtime::PaperScenarioOptions o;
+  tools::PaperScenarioOptions o;
   o.triangles = 100;
   o.duration = 0.1;
-  const auto s = runtime::make_paper_scenario("shake", o);
+  const auto s = tools::make_paper_scenario("shake", o);
   for (auto storage : {PaperFrameStorage::Obj, PaperFrameStorage::Binary}) {
     const std::string dir =
         test::temp_path(storage == PaperFrameStorage::Obj ? "paper_rt_obj" : "paper_rt_bin");
@@ -297,10 +297,10 @@ void expect_has(const std::string& msg, const std::string& part) {
 }  // namespace
 
 TEST(PaperFormat, BadInputNamesFileFrameAndProblem) {
-  runtime::PaperScenarioOptions o;
+  tools::PaperScenarioOptions o;
   o.triangles = 50;
   o.duration = 0.05;
-  const auto s = runtime::make_paper_scenario("flap", o);
+  const auto s = tools::make_paper_scenario("flap", o);
   const std::string dir = test::temp_path("paper_bad");
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);

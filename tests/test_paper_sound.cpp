@@ -21,6 +21,7 @@
 #include "chladni/runtime/paper_synth.hpp"
 #include "chladni/runtime/phisem.hpp"
 #include "chladni/runtime/spectral_noise.hpp"
+#include "chladni/tools/paper_db_generate.hpp"
 #include "paper_fixtures.hpp"
 #include "test_support.hpp"
 
@@ -28,6 +29,7 @@ namespace {
 
 using namespace chladni;
 using namespace chladni::runtime;
+using namespace chladni::tools;
 using std::numbers::pi;
 
 TEST(PaperSheet, FlatPanelIsTheKirchhoffPlateAndCurvatureStiffensLowOrders) {

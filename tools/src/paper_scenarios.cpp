@@ -1,4 +1,4 @@
-#include "chladni/runtime/paper_scenarios.hpp"
+#include "chladni/tools/paper_scenarios.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 
 #include "chladni/core/error.hpp"
 
-namespace chladni::runtime {
+namespace chladni::tools {
 namespace {
 
 struct Grid {
@@ -241,4 +241,4 @@ PaperScenario make_paper_scenario(const std::string& name, const PaperScenarioOp
   return s;
 }
 
-}  // namespace chladni::runtime
+}  // namespace chladni::tools

@@ -11,7 +11,7 @@
 
 #include "chladni/core/paper_animation.hpp"
 
-namespace chladni::runtime {
+namespace chladni::tools {
 
 struct PaperScenarioOptions {
   std::uint32_t triangles = 800;  ///< approximate; the grid rounds it
@@ -33,4 +33,4 @@ std::vector<std::string> paper_scenario_names();
 /// Throws InputError for an unknown name or options out of range.
 PaperScenario make_paper_scenario(const std::string& name, const PaperScenarioOptions& options);
 
-}  // namespace chladni::runtime
+}  // namespace chladni::tools
