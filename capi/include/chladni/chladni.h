@@ -44,7 +44,7 @@ typedef struct chladni_config {
   uint32_t mode_budget;    /* 65536: modes resident at once; the least audible are stolen */
   uint32_t max_objects;    /* 256 */
   uint32_t queue_capacity; /* 4096: commands posted between two renders */
-  uint32_t gain_ramp;      /* 256: samples over which gain changes ramp (at most block_size) */
+  uint32_t gain_ramp;      /* 256: samples over which gain changes ramp, across renders */
   int threads;             /* 0: all hardware threads (CPU backend) */
 } chladni_config;
 

@@ -60,9 +60,10 @@ class Filterbank {
   virtual void set_pole(uint32_t slot, std::complex<float> pole) = 0;
   /// Drives a slot from input stream `stream` (< max_streams(), or kNoStream) with `gain`.
   virtual void set_input(uint32_t slot, uint32_t stream, std::complex<float> gain) = 0;
-  /// Changes a slot's gains, keeping its state. The change ramps linearly over the first
-  /// min(gain_ramp(), frames) samples of the next process() call, so that a ringing mode does not
-  /// click; it takes effect at once for a slot that set_mode() started since the last call.
+  /// Changes a slot's gains, keeping its state. The change ramps linearly over gain_ramp()
+  /// samples from the start of the next process() call, across calls of any size, so that a
+  /// ringing mode does not click; a change in mid-ramp starts from where the ramp has got to. It
+  /// takes effect at once for a slot that set_mode() started since the last call.
   virtual void set_gains(uint32_t slot, const float gains[2]) = 0;
   /// Samples over which set_gains() ramps (0: at once).
   virtual uint32_t gain_ramp() const = 0;
