@@ -64,6 +64,7 @@ struct chladni_runtime {
   void drain();
   void apply_due(uint64_t t, uint32_t frames);
   uint32_t until_next_pose(uint32_t frames) const;
+  uint64_t sample_of(const chladni::capi::Command& c) const;
 
   chladni_config config;
   std::unique_ptr<chladni::runtime::Filterbank> fb;

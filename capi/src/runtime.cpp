@@ -96,12 +96,17 @@ void chladni_runtime::drain() {
   }
 }
 
+// A command's first sample (negative times are now).
+uint64_t chladni_runtime::sample_of(const Command& c) const {
+  return first_sample(std::max(c.time, 0.0), config.sample_rate);
+}
+
 // Frames up to the next pending pose change after `now` (at most `frames`): a block ends there,
 // so that moves take effect on their sample as in the offline renderer.
 uint32_t chladni_runtime::until_next_pose(uint32_t frames) const {
   for (const Command& c : pending) {
     if (c.kind == Kind::Impact) continue;
-    const uint64_t at = first_sample(std::max(c.time, 0.0), config.sample_rate);
+    const uint64_t at = sample_of(c);
     if (at > now) return static_cast<uint32_t>(std::min<uint64_t>(frames, at - now));
   }
   return frames;
@@ -109,7 +114,6 @@ uint32_t chladni_runtime::until_next_pose(uint32_t frames) const {
 
 // Applies the poses due by sample t, then strikes the impacts due before t + frames.
 void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
-  const double fs = config.sample_rate;
   auto keep_if = [&](auto&& applied) {  // compacts `pending`; shrinking keeps the capacity
     std::size_t kept = 0;
     for (std::size_t i = 0; i < pending.size(); ++i)
@@ -117,7 +121,7 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
     pending.resize(kept);
   };
   keep_if([&](const Command& c) {
-    if (c.kind == Kind::Impact || first_sample(std::max(c.time, 0.0), fs) > t) return false;
+    if (c.kind == Kind::Impact || sample_of(c) > t) return false;
     if (c.kind == Kind::Move) {
       if (player->active(c.object))
         player->move(c.object, {c.a[0], c.a[1], c.a[2]}, {c.q[0], c.q[1], c.q[2], c.q[3]});
@@ -130,7 +134,7 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
   const Synth& synth = player->synth();
   keep_if([&](const Command& c) {
     if (c.kind != Kind::Impact) return false;
-    const uint64_t at = first_sample(std::max(c.time, 0.0), fs);
+    const uint64_t at = sample_of(c);
     if (at >= t + frames) return false;
     if (!player->active(c.object)) return true;
     // The filterbank takes so many kicks per call: the rest wait for the next block.
@@ -145,7 +149,8 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
       ev.point = Vec3{c.b[0], c.b[1], c.b[2]};
     ev.contact_time = c.contact;
     // A late impact (its first sample has passed) is struck at once.
-    player->impact(c.object, ev, at <= t ? 0.0 : c.time * fs - static_cast<double>(t));
+    player->impact(c.object, ev,
+                   at <= t ? 0.0 : c.time * config.sample_rate - static_cast<double>(t));
     return true;
   });
 }

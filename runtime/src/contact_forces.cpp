@@ -34,10 +34,8 @@ int64_t ContactForces::end_sample(double t0, double tau, double sample_rate) {
 
 bool ContactForces::begin(int32_t voice, double t0, double tau) {
   if (contacts_.size() == contacts_.capacity()) return false;
-  const int64_t first = static_cast<int64_t>(std::ceil(t0));
-  const int64_t end = end_sample(t0, tau, fs_);
-  if (end <= first) return false;  // over before its first sample: the kick alone is exact
-  contacts_.push_back({voice, t0, tau * fs_, first, end, used_, 0});
+  contacts_.push_back({voice, t0, tau * fs_, static_cast<int64_t>(std::ceil(t0)),
+                       end_sample(t0, tau, fs_), used_, 0});
   return true;
 }
 

@@ -9,7 +9,7 @@
 namespace chladni::runtime::cpu {
 namespace {
 
-// S: a SIMD "ops" struct with type V, width W, load/store/set1/zero/add/mul/fmadd/fmsub.
+// S: a SIMD "ops" struct with type V, width W, load/store/set1/zero/add/sub/mul/min/fmadd/fmsub.
 template <class S, int CH, int NV, bool DRIVEN, bool RAMP>
 void run_tile(const KernelArgs& a, uint32_t t0, const Excitation* ex, const Excitation* ex_end) {
   using V = typename S::V;

@@ -230,12 +230,15 @@ void GpuFilterbank::clear_updates() {
   update_count_ = 0;
 }
 
-void GpuFilterbank::flush_updates(bool ramps_at_once) {
-  if (ramps_at_once) {  // an overflowing batch: the ramp would outlive its updates
-    auto* list = static_cast<Update*>(updates_->data());
-    for (uint32_t i = 0; i < update_count_; ++i)
-      if (list[i].flags & kRampTo) list[i].flags = (list[i].flags & ~kRampTo) | kGains;
-  }
+void GpuFilterbank::ramps_at_once(uint32_t from_slot) {
+  auto* list = static_cast<Update*>(updates_->data());
+  for (uint32_t i = 0; i < update_count_; ++i)
+    if ((list[i].flags & kRampTo) && list[i].slot >= from_slot)
+      list[i].flags = (list[i].flags & ~kRampTo) | kGains;
+}
+
+void GpuFilterbank::flush_updates(bool at_once) {
+  if (at_once) ramps_at_once(0);  // an overflowing batch: the ramp would outlive its updates
   seq_->begin();
   record_updates();
   seq_->run();
@@ -297,12 +300,8 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   const uint32_t group_modes = local_ * mpi_;
   const uint32_t groups = div_up(high_water_, group_modes);
   const uint32_t count = frames * channels_;
-  {  // Slots past the processed range take their gains at once: no dispatch would commit a ramp.
-    auto* list = static_cast<Update*>(updates_->data());
-    for (uint32_t i = 0; i < update_count_; ++i)
-      if ((list[i].flags & kRampTo) && list[i].slot >= groups * group_modes)
-        list[i].flags = (list[i].flags & ~kRampTo) | kGains;
-  }
+  // Slots past the processed range take their gains at once: no dispatch would commit a ramp.
+  ramps_at_once(groups * group_modes);
   const bool ramp = processed_ < ramp_until_ && groups > 0;
   seq_->begin();
   seq_->timestamp(0);

@@ -26,8 +26,10 @@ class ContactForces {
 
   ContactForces(double sample_rate, uint32_t max_modes, uint32_t max_contacts);
 
-  /// Starts a contact at fractional sample `t0` (absolute) lasting `tau` seconds. Modes are
-  /// added with add_mode() until the next begin() or render(). False when no contact is free.
+  /// Starts a contact at fractional sample `t0` (absolute) lasting `tau` seconds, one that
+  /// reaches past its first sample (end_sample() > ceil(t0): otherwise the kick alone is exact
+  /// and there is nothing to drive). Modes are added with add_mode() until the next begin() or
+  /// render(). False when no contact is free.
   bool begin(int32_t voice, double t0, double tau);
   /// Adds one mode to the contact being begun: decay rate and damped angular frequency, the
   /// state kick `a` of the whole impulse, and `kick`, the state the filterbank receives at

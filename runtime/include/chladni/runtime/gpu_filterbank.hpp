@@ -75,8 +75,9 @@ class GpuFilterbank final : public Filterbank {
   struct Update;
   Update& pending(uint32_t slot);
   void record_updates();
-  void flush_updates(bool ramps_at_once = false);
-  void clear_updates();  // after a submit has applied them
+  void flush_updates(bool at_once = false);
+  void ramps_at_once(uint32_t from_slot);  // queued ramps of slots >= from_slot become immediate
+  void clear_updates();                    // after a submit has applied them
 
   std::shared_ptr<gpu::Context> ctx_;
   uint32_t capacity_, channels_, max_frames_, max_excitations_, high_water_;
