@@ -7,8 +7,8 @@
 #include <numbers>
 
 #include "chladni/gpu/context.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
 
 using namespace chladni::runtime;
 

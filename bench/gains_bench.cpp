@@ -16,8 +16,8 @@
 
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
+#include "chladni/runtime/modal/transfer_gains.hpp"
 #include "chladni/runtime/thread_pool.hpp"
-#include "chladni/runtime/transfer_gains.hpp"
 
 using namespace chladni;
 using clock_type = std::chrono::steady_clock;

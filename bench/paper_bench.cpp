@@ -15,10 +15,10 @@
 #include <string>
 
 #include "chladni/gpu/context.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
-#include "chladni/runtime/paper_analysis.hpp"
-#include "chladni/runtime/paper_synth.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/paper/paper_analysis.hpp"
+#include "chladni/runtime/paper/paper_synth.hpp"
 #include "chladni/tools/paper_db_generate.hpp"
 #include "chladni/tools/paper_scenarios.hpp"
 

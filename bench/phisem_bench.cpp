@@ -22,10 +22,10 @@
 
 #include "chladni/core/random.hpp"
 #include "chladni/gpu/context.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
-#include "chladni/runtime/render.hpp"
-#include "chladni/runtime/shaker_bank.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/phisem/shaker_bank.hpp"
+#include "chladni/runtime/scene/render.hpp"
 
 using namespace chladni;
 using namespace chladni::runtime;

@@ -4,8 +4,8 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/gpu/context.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
 
 namespace chladni::cli {
 namespace {

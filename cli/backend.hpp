@@ -6,7 +6,7 @@
 
 #include "chladni/core/audio_file.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
-#include "chladni/runtime/filterbank.hpp"
+#include "chladni/runtime/filterbank/filterbank.hpp"
 
 namespace chladni::gpu {
 class Context;

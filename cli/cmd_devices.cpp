@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "chladni/gpu/context.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
 #include "commands.hpp"
 
 namespace chladni::cli {

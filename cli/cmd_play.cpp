@@ -10,7 +10,7 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/scene.hpp"
-#include "chladni/runtime/scene_timeline.hpp"
+#include "chladni/runtime/scene/scene_timeline.hpp"
 #include "commands.hpp"
 #include "scene_setup.hpp"
 

@@ -11,8 +11,8 @@
 #include "chladni/core/scene.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
-#include "chladni/runtime/render.hpp"
-#include "chladni/runtime/scene_objects.hpp"
+#include "chladni/runtime/scene/render.hpp"
+#include "chladni/runtime/scene/scene_objects.hpp"
 #include "commands.hpp"
 #include "scene_setup.hpp"
 

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "chladni/runtime/paper_database.hpp"
+#include "chladni/runtime/paper/paper_database.hpp"
 
 namespace chladni::cli {
 

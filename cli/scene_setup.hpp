@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "chladni/core/scene.hpp"
-#include "chladni/runtime/filterbank.hpp"
-#include "chladni/runtime/render.hpp"
-#include "chladni/runtime/scene_objects.hpp"
+#include "chladni/runtime/filterbank/filterbank.hpp"
+#include "chladni/runtime/scene/render.hpp"
+#include "chladni/runtime/scene/scene_objects.hpp"
 
 namespace CLI {
 class App;

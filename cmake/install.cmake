@@ -13,7 +13,7 @@ install(TARGETS ${CHLADNI_EXPORTED} EXPORT ChladniTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS chladni RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
-install(DIRECTORY core/include/ gpu/include/ runtime/include/ capi/include/
+install(DIRECTORY core/include/ gpu/include/ runtime/include/ runtime/capi/include/
                   ${PROJECT_BINARY_DIR}/core/generated_public/
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 

@@ -1,7 +1,7 @@
 // Bytes -> load_paper_database's index (paper_db.json); the folder holds two short valid WAVs
 // (a.wav at 44.1 kHz, b.wav at 22.05 kHz) for entries to name.
 #include "chladni/core/audio_file.hpp"
-#include "chladni/runtime/paper_database.hpp"
+#include "chladni/runtime/paper/paper_database.hpp"
 #include "fuzz_support.hpp"
 
 namespace {

@@ -2,7 +2,7 @@
 # How each build folder is configured, in one place: demo.sh and test.sh both come here and name
 # every option they rely on, so whichever of them runs first, the other still gets its build
 # (the demo turning tests off must not leave test.sh with a folder of no tests).
-#   bash scripts/configure.sh demo|tests|asan DIR
+#   bash scripts/configure.sh demo|tests|asan|tsan DIR
 set -euo pipefail
 cd "$(dirname "$0")/.."
 kind=$1 dir=$2
@@ -16,7 +16,10 @@ case "$kind" in
   asan)
     cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCHLADNI_SANITIZE=ON \
       -DCHLADNI_BUILD_TESTS=ON -DCHLADNI_BUILD_BENCH=OFF "-DCMAKE_CXX_FLAGS_DEBUG=-g -O1" ;;
+  tsan)
+    cmake -S . -B "$dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCHLADNI_TSAN=ON \
+      -DCHLADNI_BUILD_TESTS=ON -DCHLADNI_BUILD_BENCH=OFF "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-g -O1" ;;
   *)
-    echo "usage: configure.sh demo|tests|asan DIR" >&2
+    echo "usage: configure.sh demo|tests|asan|tsan DIR" >&2
     exit 2 ;;
 esac

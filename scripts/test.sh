@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs dependencies, builds Chladni twice (optimised, and Debug with AddressSanitizer +
 # UndefinedBehaviorSanitizer + Vulkan validation layers) and runs the whole test suite in each,
-# then fuzzes every file reader for a bounded time (scripts/fuzz.sh, clang + libFuzzer).
+# runs the multi-threaded tests under ThreadSanitizer (scripts/tsan.sh), then fuzzes every file
+# reader for a bounded time (scripts/fuzz.sh, clang + libFuzzer).
 # The GPU tests run on whatever Vulkan device is present; in CI that is Mesa lavapipe.
 # Usage: bash scripts/test.sh            (from the repository root, as root on Debian 12)
 set -euo pipefail
@@ -40,6 +41,9 @@ ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
 LSAN_OPTIONS=suppressions=$PWD/tests/lsan.supp:print_suppressions=0 \
 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
   ctest --test-dir build/asan --output-on-failure --no-tests=error -j "$jobs" -E "$heavy"
+
+echo "== ThreadSanitizer: the multi-threaded tests (scripts/tsan.sh)"
+bash scripts/tsan.sh build/tsan
 
 echo "== fuzzing every reader for ${CHLADNI_FUZZ_SECONDS:-15} s each (scripts/fuzz.sh)"
 bash scripts/fuzz.sh "${CHLADNI_FUZZ_SECONDS:-15}"

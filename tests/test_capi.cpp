@@ -9,8 +9,8 @@
 #include "chladni/core/material.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/core/soundbank.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/render.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/scene/render.hpp"
 #include "test_support.hpp"
 
 using namespace chladni;
@@ -44,14 +44,11 @@ chladni_bank* bank(chladni_runtime* rt, const std::vector<InlineMode>& modes) {
   return b;
 }
 
-}  // namespace
-
-TEST(CApi, RendersWhatTheOfflineRendererDoes) {
-  // Two objects, three impacts (one with a contact), and the listener stepping closer at a
-  // block boundary (512 / 48 kHz), where both apply moves.
+// The bowl and the bar of the tests, as a scene's objects.
+Scene bowl_and_bar(double duration) {
   Scene scene;
   scene.channels = 2;
-  scene.duration = 0.5;
+  scene.duration = duration;
   SceneObject bowl, bar;
   bowl.name = "bowl";
   bowl.position = {0.3, 1.0, 0};
@@ -60,6 +57,35 @@ TEST(CApi, RendersWhatTheOfflineRendererDoes) {
   bar.position = {-0.5, 2.0, 0};
   bar.modes = kBar;
   scene.objects = {bowl, bar};
+  return scene;
+}
+
+// The scene rendered offline, on the CPU filterbank.
+AudioBuffer offline(const Scene& scene) {
+  std::vector<runtime::ObjectModes> objects{runtime::object_modes(scene.objects[0].modes),
+                                            runtime::object_modes(scene.objects[1].modes)};
+  runtime::CpuFilterbank fb({.capacity = 65536, .channels = 2, .threads = 1});
+  return runtime::render_scene(scene, objects, fb, {});
+}
+
+// The scene's objects spawned through the C API, as objects 0 and 1.
+void spawn_objects(chladni_runtime* rt, const Scene& scene) {
+  chladni_bank* banks[2] = {bank(rt, kBowl), bank(rt, kBar)};
+  const double identity[4] = {1, 0, 0, 0};
+  for (int k = 0; k < 2; ++k) {
+    uint32_t id = 0;
+    const Vec3& p = scene.objects[k].position;
+    ASSERT_EQ(chladni_spawn(rt, banks[k], p.data(), identity, 1.0, &id), CHLADNI_OK);
+    EXPECT_EQ(id, uint32_t(k));
+  }
+}
+
+}  // namespace
+
+TEST(CApi, RendersWhatTheOfflineRendererDoes) {
+  // Two objects, three impacts (one with a contact), and the listener stepping closer at a
+  // block boundary (512 / 48 kHz), where both apply moves.
+  Scene scene = bowl_and_bar(0.5);
   const double times[3] = {0.0101, 0.0333, 0.2}, impulses[3] = {0.01, 0.02, 0.005},
                contacts[3] = {0.0008, 0.0, 0.002};
   const std::size_t which[3] = {0, 1, 0};
@@ -75,20 +101,10 @@ TEST(CApi, RendersWhatTheOfflineRendererDoes) {
   step.time = 512.0 * 40 / 48000;
   step.position = Vec3{0, 0.6, 0};
   scene.moves = {step};
-  std::vector<runtime::ObjectModes> objects{runtime::object_modes(scene.objects[0].modes),
-                                            runtime::object_modes(scene.objects[1].modes)};
-  runtime::CpuFilterbank fb({.capacity = 65536, .channels = 2, .threads = 1});
-  const AudioBuffer ref = runtime::render_scene(scene, objects, fb, {});
+  const AudioBuffer ref = offline(scene);
 
   Runtime r;
-  chladni_bank* banks[2] = {bank(r.rt, kBowl), bank(r.rt, kBar)};
-  const double identity[4] = {1, 0, 0, 0};
-  for (int k = 0; k < 2; ++k) {
-    uint32_t id = 0;
-    const Vec3& p = scene.objects[k].position;
-    ASSERT_EQ(chladni_spawn(r.rt, banks[k], p.data(), identity, 1.0, &id), CHLADNI_OK);
-    EXPECT_EQ(id, uint32_t(k));
-  }
+  spawn_objects(r.rt, scene);
   for (int k = 0; k < 3; ++k) {
     chladni_impact im{};
     im.object = static_cast<uint32_t>(which[k]);
@@ -108,6 +124,87 @@ TEST(CApi, RendersWhatTheOfflineRendererDoes) {
   const double peak = test::max_abs(ref.samples);
   ASSERT_GT(peak, 1e-4);
   EXPECT_LT(test::max_diff(ref.samples, out), 1e-6 * peak);
+}
+
+TEST(CApi, ShakesAsTheOfflineRendererDoes) {
+  // Gravel poured into the bowl (the particles ring its modes) and a maraca held at the bar
+  // (its own resonances), then the bowl struck while the gravel still rattles.
+  Scene scene = bowl_and_bar(0.6);
+  ShakeEvent gravel, maraca;
+  gravel.time = 0.05;
+  gravel.object = 0;
+  gravel.instrument = "gravel";
+  gravel.energy = 0.8;
+  maraca.time = 0.12;
+  maraca.object = 1;
+  maraca.instrument = "maraca";
+  maraca.energy = 0.5;
+  maraca.resonate_object = false;
+  ShakeEvent again = gravel;
+  again.time = 0.3;
+  scene.shakes = {gravel, maraca, again};
+  ImpactEvent hit;
+  hit.time = 0.2;
+  hit.impulse = 0.01;
+  scene.events = {hit};
+  const AudioBuffer ref = offline(scene);
+
+  Runtime r;
+  spawn_objects(r.rt, scene);
+  uint32_t shakers[2] = {9, 9};
+  chladni_shaker_desc d{};
+  d.object = 0;
+  d.instrument = "gravel";
+  d.resonate_object = 1;
+  ASSERT_EQ(chladni_shaker_add(r.rt, &d, &shakers[0]), CHLADNI_OK) << chladni_last_error();
+  d.object = 1;
+  d.instrument = "maraca";
+  d.resonate_object = 0;
+  ASSERT_EQ(chladni_shaker_add(r.rt, &d, &shakers[1]), CHLADNI_OK) << chladni_last_error();
+  EXPECT_EQ(shakers[0], 0u);
+  EXPECT_EQ(shakers[1], 1u);
+  ASSERT_EQ(chladni_post_shake(r.rt, shakers[0], gravel.time, gravel.energy), CHLADNI_OK);
+  ASSERT_EQ(chladni_post_shake(r.rt, shakers[1], maraca.time, maraca.energy), CHLADNI_OK);
+  ASSERT_EQ(chladni_post_shake(r.rt, shakers[0], again.time, again.energy), CHLADNI_OK);
+  chladni_impact im{};
+  im.time = hit.time;
+  im.impulse = hit.impulse;
+  im.direction[2] = -1;
+  im.vertex = -1;
+  ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  std::vector<float> out(ref.samples.size());
+  for (std::size_t n = 0; n < ref.frames(); n += 441)
+    ASSERT_EQ(chladni_render(r.rt, out.data() + 2 * n,
+                             uint32_t(std::min<std::size_t>(441, ref.frames() - n))),
+              CHLADNI_OK)
+        << chladni_last_error();
+  // Silence before the first shake; both shakers sound (the maraca alone before the hit).
+  const std::size_t first = static_cast<std::size_t>(gravel.time * 48000);
+  EXPECT_EQ(test::max_abs(std::span(out).first(2 * first)), 0.0);
+  EXPECT_GT(test::max_abs(std::span(out).subspan(2 * 9600, 2 * 2000)), 0.0);  // 0.2 s
+  const double peak = test::max_abs(ref.samples);
+  ASSERT_GT(peak, 1e-5);
+  EXPECT_LT(test::max_diff(ref.samples, out), 1e-5 * peak);
+
+  // Bad shakers and shakes name what is wrong.
+  d.instrument = "kazoo";
+  uint32_t k = 0;
+  EXPECT_EQ(chladni_shaker_add(r.rt, &d, &k), CHLADNI_INPUT_ERROR);
+  EXPECT_NE(std::string(chladni_last_error()).find("unknown instrument 'kazoo'"), std::string::npos)
+      << chladni_last_error();
+  EXPECT_EQ(chladni_post_shake(r.rt, 7, 0.7, 0.5), CHLADNI_INPUT_ERROR);
+  EXPECT_NE(std::string(chladni_last_error()).find("no shaker 7"), std::string::npos);
+  EXPECT_EQ(chladni_post_shake(r.rt, 0, 0.7, 1.5), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_post_shake(r.rt, 0, NAN, 0.5), CHLADNI_INPUT_ERROR);
+  // Removing the bowl silences its gravel and refuses its shakes.
+  ASSERT_EQ(chladni_post_shake(r.rt, 0, chladni_time(r.rt), 1.0), CHLADNI_OK);
+  ASSERT_EQ(chladni_remove(r.rt, 0), CHLADNI_OK);
+  ASSERT_EQ(chladni_remove(r.rt, 1), CHLADNI_OK);
+  EXPECT_EQ(chladni_post_shake(r.rt, 0, chladni_time(r.rt), 1.0), CHLADNI_INPUT_ERROR);
+  std::vector<float> tail(2 * 1024);
+  ASSERT_EQ(chladni_render(r.rt, tail.data(), 512), CHLADNI_OK);  // gains ramp to zero
+  ASSERT_EQ(chladni_render(r.rt, tail.data(), 1024), CHLADNI_OK);
+  EXPECT_EQ(test::max_abs(tail), 0.0);
 }
 
 TEST(CApi, RefusesBadInputAndAFullQueue) {
@@ -136,8 +233,15 @@ TEST(CApi, RefusesBadInputAndAFullQueue) {
   ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
   EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
   EXPECT_GT(test::max_abs(out), 0.0);
-  // A removed object is silent at once and refuses commands.
+  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  // A removed object fades out over the gain ramp (256 samples), without a step, then is
+  // silent; it refuses commands at once.
+  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  const double ringing = test::max_abs(out);
   ASSERT_EQ(chladni_remove(r.rt, id), CHLADNI_OK);
+  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  EXPECT_GT(test::max_abs(std::span(out).first(128)), 0.3 * ringing);
+  EXPECT_LT(test::max_abs(std::span(out).last(16)), 0.1 * ringing);
   ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
   EXPECT_EQ(test::max_abs(out), 0.0);
   EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_INPUT_ERROR);

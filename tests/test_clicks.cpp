@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "chladni/core/scene.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
-#include "chladni/runtime/render.hpp"
-#include "chladni/runtime/synth.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/modal/synth.hpp"
+#include "chladni/runtime/scene/render.hpp"
 #include "test_support.hpp"
 
 using namespace chladni;

@@ -6,8 +6,8 @@
 #include <numbers>
 #include <random>
 
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
 #include "test_support.hpp"
 
 using namespace chladni;

@@ -11,8 +11,8 @@
 
 #include "chladni/core/spherical.hpp"
 #include "chladni/core/transfer.hpp"
+#include "chladni/runtime/modal/transfer_gains.hpp"
 #include "chladni/runtime/thread_pool.hpp"
-#include "chladni/runtime/transfer_gains.hpp"
 #include "test_support.hpp"
 
 namespace chladni {

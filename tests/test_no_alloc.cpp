@@ -2,6 +2,7 @@
 // allocation functions to count calls (and must not share a process with Vulkan layers).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <cstdlib>
@@ -9,9 +10,9 @@
 #include <numbers>
 
 #include "chladni/chladni.h"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/shaker_bank.hpp"
-#include "chladni/runtime/synth.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/modal/synth.hpp"
+#include "chladni/runtime/phisem/shaker_bank.hpp"
 
 namespace {
 std::atomic<bool> g_count{false};
@@ -79,8 +80,8 @@ TEST(Synth, RenderAndExciteDoNotAllocate) {
 TEST(ShakerBank, ShakeRenderAndSharedSynthDoNotAllocate) {
   // A synth and a shaker bank share the filterbank, as render_scene does.
   CpuFilterbank fb({.capacity = 4096, .channels = 2, .threads = 2});
-  Synth synth(fb, {.sample_rate = kFs, .max_modes = 2048, .reserved_end = 2048 + 64});
-  ShakerBank bank(fb, {.sample_rate = kFs, .first_slot = 2048, .max_voices = 8});
+  Synth synth(fb, {.sample_rate = kFs, .max_modes = 2048});
+  ShakerBank bank(fb, {.sample_rate = kFs, .slots = 64, .max_voices = 8});
   for (const char* name : {"maraca", "tambourine", "sleighbells", "water"})
     bank.add_voice(instrument_voice(phisem_preset(name), kFs));
   std::vector<ModeSpec> modes;
@@ -108,7 +109,8 @@ TEST(ShakerBank, ShakeRenderAndSharedSynthDoNotAllocate) {
 
 TEST(CApi, PostingAndRenderingDoNotAllocate) {
   // The game thread's posts and the audio thread's render, with listener moves (gain updates),
-  // impacts with contacts, and the objects' transfer-free gains, after one warm-up render.
+  // impacts with contacts, shakes of two shakers, the objects' transfer-free gains, and an
+  // object's removal (its fade and stop), after one warm-up render.
   chladni_config c;
   chladni_config_default(&c);
   c.threads = 2;
@@ -129,6 +131,10 @@ TEST(CApi, PostingAndRenderingDoNotAllocate) {
     uint32_t id = 0;
     ASSERT_EQ(chladni_spawn(rt, bank, at, identity, 1.0, &id), CHLADNI_OK);
   }
+  uint32_t gravel = 0, maraca = 0;
+  const chladni_shaker_desc in_bowl{0, "gravel", 0, 1, 0}, at_bar{1, "maraca", 0, 0, 0};
+  ASSERT_EQ(chladni_shaker_add(rt, &in_bowl, &gravel), CHLADNI_OK);
+  ASSERT_EQ(chladni_shaker_add(rt, &at_bar, &maraca), CHLADNI_OK);
   std::vector<float> out(256 * 2);
   ASSERT_EQ(chladni_render(rt, out.data(), 256), CHLADNI_OK);  // warm-up
   g_allocs = 0;
@@ -136,7 +142,7 @@ TEST(CApi, PostingAndRenderingDoNotAllocate) {
   for (int b = 0; b < 200; ++b) {
     const double t = chladni_time(rt);
     chladni_impact im{};
-    im.object = static_cast<uint32_t>(b % 4);
+    im.object = static_cast<uint32_t>(b % 3);  // object 3 is removed half-way
     im.time = t + 0.001;
     im.impulse = 0.01;
     im.direction[2] = -1;
@@ -145,9 +151,14 @@ TEST(CApi, PostingAndRenderingDoNotAllocate) {
     EXPECT_EQ(chladni_post_impact(rt, &im), CHLADNI_OK);
     const double pos[3] = {0.01 * b, 0, 0};
     EXPECT_EQ(chladni_post_listener(rt, t + 0.002, pos, fwd, up), CHLADNI_OK);
+    if (b % 5 == 0) EXPECT_EQ(chladni_post_shake(rt, b % 10 ? gravel : maraca, t, 0.7), CHLADNI_OK);
+    if (b == 100) EXPECT_EQ(chladni_remove(rt, 3), CHLADNI_OK);
     EXPECT_EQ(chladni_render(rt, out.data(), 256), CHLADNI_OK);
   }
   g_count = false;
   EXPECT_EQ(g_allocs.load(), 0);
+  float peak = 0;
+  for (float x : out) peak = std::max(peak, std::abs(x));
+  EXPECT_GT(peak, 0.0f);
   chladni_runtime_destroy(rt);
 }

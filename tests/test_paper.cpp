@@ -13,7 +13,7 @@
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/paper_animation.hpp"
-#include "chladni/runtime/paper_analysis.hpp"
+#include "chladni/runtime/paper/paper_analysis.hpp"
 #include "chladni/tools/paper_scenarios.hpp"
 #include "cli_support.hpp"
 #include "paper_fixtures.hpp"

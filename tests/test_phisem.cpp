@@ -15,10 +15,10 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/gpu/buffer.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
-#include "chladni/runtime/render.hpp"
-#include "chladni/runtime/shaker_bank.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/phisem/shaker_bank.hpp"
+#include "chladni/runtime/scene/render.hpp"
 #include "test_support.hpp"
 
 using namespace chladni;

@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "chladni/core/analytic_bar.hpp"
-#include "chladni/runtime/impact.hpp"
+#include "chladni/runtime/modal/impact.hpp"
 
 using namespace chladni;
 

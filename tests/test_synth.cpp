@@ -7,10 +7,11 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/scene.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/gpu_filterbank.hpp"
-#include "chladni/runtime/render.hpp"
-#include "chladni/runtime/synth.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/modal/synth.hpp"
+#include "chladni/runtime/phisem/shaker_bank.hpp"
+#include "chladni/runtime/scene/render.hpp"
 #include "test_support.hpp"
 
 using namespace chladni;
@@ -45,6 +46,75 @@ TEST(Synth, RetiresAModeOnce100dBBelowItsPeak) {
   // A new kick makes it resident again, in the lowest slot.
   synth.excite(v, a, 0);
   EXPECT_EQ(synth.slot_of(v, 0), 0);
+}
+
+// Users of one filterbank lease disjoint slot ranges; a synth sounds the same in any range, and
+// the processed range covers every lease in use.
+TEST(Synth, LeasedSlotRangesShareAFilterbankWithoutChangingTheSound) {
+  const ModeSpec m[] = {mode(440, 3.0), mode(1250, 8.0, 0.5f), mode(3100, 20.0, 0.25f)};
+  const std::complex<float> a[] = {{1.0f, 0.0f}, {0.0f, 0.7f}, {0.3f, 0.2f}};
+  auto run = [&](Filterbank& fb, Synth& synth) {
+    const auto v = synth.start_voice(m);
+    synth.excite(v, a, 17);
+    std::vector<float> out(4 * 256), block(256);
+    for (int b = 0; b < 4; ++b) {
+      synth.render(256, block.data());
+      std::copy(block.begin(), block.end(), out.begin() + 256 * b);
+    }
+    (void)fb;
+    return out;
+  };
+  CpuFilterbank alone({.capacity = 64, .channels = 1, .threads = 1});
+  Synth first(alone, {.sample_rate = kFs});
+  const auto reference = run(alone, first);
+
+  CpuFilterbank shared({.capacity = 64, .channels = 1, .threads = 1});
+  ShakerBank shakers(shared, {.sample_rate = kFs, .slots = 24, .max_voices = 2});
+  EXPECT_EQ(shared.unleased(), 40u);
+  Synth second(shared, {.sample_rate = kFs, .max_modes = 32});
+  EXPECT_EQ(shared.unleased(), 8u);
+  EXPECT_THROW(shared.lease(9), InputError);
+  EXPECT_EQ(shared.lease(8).begin, 56u);
+  EXPECT_THROW(Synth(shared, {.sample_rate = kFs}), InputError);  // nothing left to lease
+  const auto out = run(shared, second);
+  ASSERT_EQ(out.size(), reference.size());
+  for (std::size_t i = 0; i < out.size(); ++i) ASSERT_EQ(out[i], reference[i]) << "sample " << i;
+  // The synth's modes sit above the shakers' slots.
+  const auto v = second.start_voice(m);
+  second.excite(v, a, 0);
+  EXPECT_GE(second.slot_of(v, 0), 24);
+  EXPECT_LT(second.slot_of(v, 2), 24 + 32);
+  // A shaker voice in its lease sounds alongside the synth (its slots are processed).
+  shakers.add_voice(instrument_voice(phisem_preset("maraca"), kFs));
+  ASSERT_TRUE(shakers.shake(0, 1.0f, 0));
+  std::vector<float> block(256);
+  const DriveInput in = shakers.prepare(256);
+  second.render(256, block.data(), in);
+  shakers.finish(256);
+  double shaker_state = 0;
+  for (uint32_t s = 0; s < 24; ++s) shaker_state += std::abs(shared.state(s));
+  EXPECT_GT(shaker_state, 0.0);
+}
+
+// A filterbank outlives its users: a synth's lease returns when it goes, its ringing slots
+// cleared, so the next user starts from silence.
+TEST(Synth, ALeaseReturnsWithItsSlotsSilenced) {
+  CpuFilterbank fb({.capacity = 64, .channels = 1, .threads = 1});
+  std::vector<float> out(256);
+  {
+    Synth first(fb, {.sample_rate = kFs});
+    EXPECT_EQ(fb.unleased(), 0u);
+    const ModeSpec m[] = {mode(440, 0.5)};
+    const std::complex<float> a[] = {{1.0f, 0.0f}};
+    first.excite(first.start_voice(m), a, 0);
+    first.render(256, out.data());
+    ASSERT_GT(test::max_abs(out), 0.1);
+  }
+  EXPECT_EQ(fb.unleased(), 64u);
+  Synth second(fb, {.sample_rate = kFs});
+  second.render(256, out.data());
+  EXPECT_EQ(test::max_abs(out), 0.0);
+  EXPECT_EQ(fb.state(0), std::complex<float>(0, 0));
 }
 
 TEST(Synth, StealsTheLeastAudibleModesWhenTheBudgetIsFull) {

@@ -306,8 +306,8 @@ TEST(Transfer, GpuKernelsMatchTheCpuReference) {
 }  // namespace
 }  // namespace chladni
 
+#include "chladni/runtime/modal/transfer_gains.hpp"
 #include "chladni/runtime/thread_pool.hpp"
-#include "chladni/runtime/transfer_gains.hpp"
 
 namespace chladni {
 namespace {
@@ -410,8 +410,8 @@ TEST(TransferGains, DistanceAndDirectionShapeTheGain) {
 }  // namespace chladni
 
 #include "chladni/core/scene.hpp"
-#include "chladni/runtime/cpu_filterbank.hpp"
-#include "chladni/runtime/render.hpp"
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/scene/render.hpp"
 
 namespace chladni {
 namespace {

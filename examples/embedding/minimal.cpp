@@ -2,9 +2,9 @@
 // Built by the tests; run it with a soundbank path or without (an analytic steel bar).
 #include <chladni/core/analytic_bar.hpp>
 #include <chladni/core/soundbank.hpp>
-#include <chladni/runtime/cpu_filterbank.hpp>
-#include <chladni/runtime/scene_objects.hpp>
-#include <chladni/runtime/scene_player.hpp>
+#include <chladni/runtime/filterbank/cpu_filterbank.hpp>
+#include <chladni/runtime/scene/scene_objects.hpp>
+#include <chladni/runtime/scene/scene_player.hpp>
 #include <cmath>
 #include <cstdio>
 #include <vector>

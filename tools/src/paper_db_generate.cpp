@@ -10,8 +10,8 @@
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
-#include "chladni/runtime/paper_sheet.hpp"
-#include "chladni/runtime/spectral_noise.hpp"
+#include "chladni/runtime/paper/paper_sheet.hpp"
+#include "chladni/runtime/paper/spectral_noise.hpp"
 
 namespace chladni::tools {
 namespace fs = std::filesystem;

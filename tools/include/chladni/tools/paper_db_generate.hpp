@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "chladni/runtime/paper_database.hpp"
+#include "chladni/runtime/paper/paper_database.hpp"
 
 namespace chladni::tools {
 

@@ -1,0 +1,141 @@
+/* Chladni's C API: the modal-sound runtime for engines. Opaque handles, status codes and
+ * chladni_last_error() for the message; no exception crosses it.
+ *
+ * Threads: chladni_runtime_create/destroy, the bank calls, chladni_spawn, chladni_shaker_add and
+ * chladni_remove are control calls: they allocate, and must not run while chladni_render does. The
+ * chladni_post_* calls come from one producer thread (a game thread) and chladni_render from one
+ * consumer (the audio thread): they talk through a lock-free queue, allocate nothing, and never
+ * wait.
+ *
+ * Time: the runtime's clock is the audio it has rendered (chladni_time). A posted command
+ * carries a time on that clock; impacts land on their sample (sub-sample accurate), moves and
+ * listener changes on their first sample, the gains then ramping over gain_ramp samples. A
+ * command whose time has passed applies at once. See docs/embedding.md. */
+#ifndef CHLADNI_H
+#define CHLADNI_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define CHLADNI_API_VERSION 1
+
+typedef enum chladni_status {
+  CHLADNI_OK = 0,
+  CHLADNI_INPUT_ERROR = 2,   /* a bad argument or file; chladni_last_error() names it */
+  CHLADNI_QUEUE_FULL = 3,    /* no room for the command until the next render */
+  CHLADNI_NO_DEVICE = 4,     /* backend GPU without a usable Vulkan device */
+  CHLADNI_INTERNAL_ERROR = 5 /* a bug: please report chladni_last_error() */
+} chladni_status;
+
+typedef enum chladni_backend {
+  CHLADNI_BACKEND_CPU = 0,
+  CHLADNI_BACKEND_GPU = 1,
+  CHLADNI_BACKEND_AUTO = 2 /* the GPU when a Vulkan device is usable, else the CPU */
+} chladni_backend;
+
+typedef struct chladni_config {
+  chladni_backend backend; /* CPU */
+  double sample_rate;      /* 48000 */
+  uint32_t block_size;     /* 256: frames per filterbank call (renders split larger requests) */
+  int channels;            /* 2: 1 or 2 (constant-power pan) */
+  uint32_t mode_budget;    /* 65536: modes resident at once; the least audible are stolen */
+  uint32_t max_objects;    /* 256 */
+  uint32_t queue_capacity; /* 4096: commands posted between two renders */
+  uint32_t gain_ramp;      /* 256: samples over which gain changes ramp, across renders */
+  int threads;             /* 0: all hardware threads (CPU backend) */
+  uint32_t shaker_slots;   /* 4096: resonances of all shakers together (0: no shakers) */
+  uint32_t max_shakers;    /* 64 */
+} chladni_config;
+
+typedef struct chladni_runtime chladni_runtime;
+typedef struct chladni_bank chladni_bank;
+
+/* Fills `config` with the defaults above. */
+void chladni_config_default(chladni_config* config);
+/* The calling thread's last error message ("" when none). Valid until its next failing call. */
+const char* chladni_last_error(void);
+
+chladni_status chladni_runtime_create(const chladni_config* config, chladni_runtime** out);
+void chladni_runtime_destroy(chladni_runtime* runtime);
+/* The filterbank in words, e.g. "cpu (avx512, 2 threads)". */
+const char* chladni_runtime_backend(const chladni_runtime* runtime);
+
+/* Banks: a soundbank (chladni precompute) from a file or from its bytes, or inline modes
+ * (frequency Hz, decay 1/s, pressure at 1 m per N s). Modes above the runtime's Nyquist
+ * frequency are dropped; a bank with none left is refused. */
+chladni_status chladni_bank_load_file(chladni_runtime* runtime, const char* path,
+                                      chladni_bank** out);
+chladni_status chladni_bank_load_memory(chladni_runtime* runtime, const void* bytes, size_t size,
+                                        chladni_bank** out);
+chladni_status chladni_bank_from_modes(chladni_runtime* runtime, const double* frequency_hz,
+                                       const double* decay, const double* amplitude, size_t count,
+                                       chladni_bank** out);
+size_t chladni_bank_mode_count(const chladni_bank* bank);
+size_t chladni_bank_point_count(const chladni_bank* bank); /* surface points (0: inline) */
+/* The axis-aligned box of a bank's surface points in its own frame (m), for a collision shape.
+ * CHLADNI_INPUT_ERROR for a bank without geometry (inline modes). */
+chladni_status chladni_bank_bounds(const chladni_bank* bank, double min[3], double max[3]);
+/* The solid's mass (kg): its closed surface's volume times the material's density, for a
+ * rigid body. 0 for inline modes. */
+double chladni_bank_mass(const chladni_bank* bank);
+
+/* An instance of a bank at a pose (position in m; orientation a unit quaternion w, x, y, z,
+ * object frame to world) with a gain; `object` receives its index. Control call. */
+chladni_status chladni_spawn(chladni_runtime* runtime, chladni_bank* bank, const double position[3],
+                             const double orientation[4], double gain, uint32_t* object);
+/* Silences an object (its sound fades out over gain_ramp samples) and refuses commands for it
+ * from then on. Control call. */
+chladni_status chladni_remove(chladni_runtime* runtime, uint32_t object);
+
+typedef struct chladni_impact {
+  uint32_t object;
+  double time;         /* s on the runtime's clock */
+  double impulse;      /* N s, > 0 */
+  double direction[3]; /* object frame; normalized here */
+  double point[3];     /* object frame: the nearest surface point is struck ... */
+  int64_t vertex;      /* ... unless this is >= 0: that surface point */
+  double contact_time; /* s, 0 to 0.1: a half-sine force; 0 is an ideal impulse */
+} chladni_impact;
+
+/* Commands: from one producer thread; CHLADNI_QUEUE_FULL when the queue has no room. */
+chladni_status chladni_post_impact(chladni_runtime* runtime, const chladni_impact* impact);
+chladni_status chladni_post_move(chladni_runtime* runtime, uint32_t object, double time,
+                                 const double position[3], const double orientation[4]);
+chladni_status chladni_post_listener(chladni_runtime* runtime, double time,
+                                     const double position[3], const double forward[3],
+                                     const double up[3]);
+
+/* A shaker: PhISEM particles (Cook 1997) in or at an object, played by chladni_post_shake. */
+typedef struct chladni_shaker_desc {
+  uint32_t object;        /* the object the particles are in */
+  const char* instrument; /* a PhISEM preset: "maraca", "gravel", "coins", ... (chladni shake
+                             --list) */
+  double particles;       /* 0: the instrument's own count */
+  int resonate_object;    /* 1: the particles strike the object's surface and ring its modes;
+                             0: the instrument's own resonances, sounding at the object */
+  double impulse;         /* N s per unit of excitation on the surface (resonate_object); 0: 1e-3 */
+} chladni_shaker_desc;
+
+/* Adds a shaker, silent until shaken; `shaker` receives its index. Its sound follows its
+ * object's pose and ends when the object is removed. Control call. */
+chladni_status chladni_shaker_add(chladni_runtime* runtime, const chladni_shaker_desc* desc,
+                                  uint32_t* shaker);
+/* Shakes: adds `energy` (0 to 1] to the particles at `time`. A command, as chladni_post_*. */
+chladni_status chladni_post_shake(chladni_runtime* runtime, uint32_t shaker, double time,
+                                  double energy);
+
+/* Renders `frames` interleaved frames into `out` (frames * channels floats, Pa at the
+ * listener). Audio thread: no allocation, no lock, no wait beyond the filterbank's own work. */
+chladni_status chladni_render(chladni_runtime* runtime, float* out, uint32_t frames);
+/* Seconds rendered so far, as of the last chladni_render to return; any thread may ask. */
+double chladni_time(const chladni_runtime* runtime);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* CHLADNI_H */

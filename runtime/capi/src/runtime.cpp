@@ -1,0 +1,227 @@
+// chladni_runtime: creation, the command queue's consumer side and rendering.
+#include <algorithm>
+#include <cmath>
+
+#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/scene/scene_objects.hpp"
+#include "handles.hpp"
+
+using namespace chladni;
+using namespace chladni::runtime;
+using chladni::capi::Command;
+using chladni::capi::Kind;
+
+namespace {
+
+thread_local std::string g_error;
+
+std::unique_ptr<Filterbank> make_filterbank(const chladni_config& c) {
+  if (c.backend != CHLADNI_BACKEND_CPU) {
+    try {
+      auto ctx = std::make_shared<gpu::Context>();
+      const VkPhysicalDeviceType t = ctx->info().type;
+      // auto: a real GPU; a CPU driver such as lavapipe is slower than the CPU filterbank.
+      if (c.backend == CHLADNI_BACKEND_GPU || t == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU ||
+          t == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU) {
+        GpuFilterbankOptions o;
+        o.capacity = c.mode_budget;
+        o.channels = c.channels;
+        o.max_frames = c.block_size;
+        o.gain_ramp = c.gain_ramp;
+        o.capacity = c.mode_budget + c.shaker_slots;
+        o.max_streams = c.shaker_slots ? c.max_shakers : 0;
+        return std::make_unique<GpuFilterbank>(ctx, o);
+      }
+    } catch (const gpu::NoDeviceError&) {
+      if (c.backend == CHLADNI_BACKEND_GPU) throw;
+    }
+  }
+  CpuFilterbankOptions o;
+  o.capacity = c.mode_budget + c.shaker_slots;
+  o.channels = c.channels;
+  o.threads = c.threads;
+  o.max_frames = c.block_size;
+  o.gain_ramp = c.gain_ramp;
+  return std::make_unique<CpuFilterbank>(o);
+}
+
+void check_config(const chladni_config& c) {
+  if (!(c.sample_rate >= 8000 && c.sample_rate <= 384000))
+    throw InputError("sample_rate must be in [8000, 384000]");
+  if (c.channels != 1 && c.channels != 2) throw InputError("channels must be 1 or 2");
+  if (c.block_size < 1 || c.block_size > 16384)
+    throw InputError("block_size must be in [1, 16384]");
+  if (c.mode_budget < 1 || c.mode_budget > (1u << 24))
+    throw InputError("mode_budget must be in [1, 2^24]");
+  if (c.max_objects < 1 || c.max_objects > (1u << 20))
+    throw InputError("max_objects must be in [1, 2^20]");
+  if (c.queue_capacity < 1 || c.queue_capacity > (1u << 24))
+    throw InputError("queue_capacity must be in [1, 2^24]");
+  if (c.gain_ramp > 65536) throw InputError("gain_ramp must be at most 65536");
+  if (c.threads < 0 || c.threads > 1024) throw InputError("threads must be in [0, 1024]");
+  if (c.shaker_slots > (1u << 20)) throw InputError("shaker_slots must be at most 2^20");
+  if (c.shaker_slots && (c.max_shakers < 1 || c.max_shakers > 4096))
+    throw InputError("max_shakers must be in [1, 4096] when shaker_slots > 0");
+  if (c.backend != CHLADNI_BACKEND_CPU && c.backend != CHLADNI_BACKEND_GPU &&
+      c.backend != CHLADNI_BACKEND_AUTO)
+    throw InputError("backend must be CPU, GPU or AUTO");
+}
+
+}  // namespace
+
+namespace chladni::capi {
+
+chladni_status fail(chladni_status status, std::string message) {
+  g_error = std::move(message);
+  return status;
+}
+
+}  // namespace chladni::capi
+
+chladni_runtime::chladni_runtime(const chladni_config& c)
+    : config(c), fb(make_filterbank(c)), name(fb->name()), queue(c.queue_capacity) {
+  PlayerOptions po;
+  po.sample_rate = c.sample_rate;
+  po.synth.sample_rate = c.sample_rate;
+  po.synth.max_modes = c.mode_budget;
+  po.synth.max_voices = c.max_objects;
+  po.shaker_slots = c.shaker_slots;
+  po.max_shakers = c.shaker_slots ? c.max_shakers : 0;
+  player = std::make_unique<ScenePlayer>(*fb, po);
+  pending.reserve(queue.capacity());
+}
+
+// Moves the queued commands into `pending`, keeping it sorted by time (stable).
+void chladni_runtime::drain() {
+  while (const Command* c = queue.front()) {
+    if (pending.size() == pending.capacity()) break;  // the rest waits for the next render
+    auto at = std::upper_bound(pending.begin(), pending.end(), c->time,
+                               [](double t, const Command& x) { return t < x.time; });
+    pending.insert(at, *c);
+    queue.pop();
+  }
+}
+
+// A command's first sample (negative times are now).
+uint64_t chladni_runtime::sample_of(const Command& c) const {
+  return first_sample(std::max(c.time, 0.0), config.sample_rate);
+}
+
+// Frames up to the next pending pose change after `now` (at most `frames`): a block ends there,
+// so that moves take effect on their sample as in the offline renderer.
+uint32_t chladni_runtime::until_next_pose(uint32_t frames) const {
+  for (const Command& c : pending) {
+    if (c.kind == Kind::Impact || c.kind == Kind::Shake) continue;
+    const uint64_t at = sample_of(c);
+    if (at > now) return static_cast<uint32_t>(std::min<uint64_t>(frames, at - now));
+  }
+  return frames;
+}
+
+// Applies the poses due by sample t, then strikes the impacts due before t + frames.
+void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
+  auto keep_if = [&](auto&& applied) {  // compacts `pending`; shrinking keeps the capacity
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < pending.size(); ++i)
+      if (!applied(pending[i])) pending[kept++] = pending[i];
+    pending.resize(kept);
+  };
+  keep_if([&](const Command& c) {
+    if (c.kind == Kind::Impact || c.kind == Kind::Shake || sample_of(c) > t) return false;
+    if (c.kind == Kind::Move) {
+      if (player->active(c.object))
+        player->move(c.object, {c.a[0], c.a[1], c.a[2]}, {c.q[0], c.q[1], c.q[2], c.q[3]});
+    } else {
+      player->set_listener(
+          {{c.a[0], c.a[1], c.a[2]}, {c.b[0], c.b[1], c.b[2]}, {c.c[0], c.c[1], c.c[2]}});
+    }
+    return true;
+  });
+  const Synth& synth = player->synth();
+  keep_if([&](const Command& c) {
+    if (c.kind != Kind::Shake) return false;
+    const uint64_t at = sample_of(c);
+    if (at >= t + frames) return false;
+    if (!player->active(player->shaker_object(c.object))) return true;
+    // false: the block's shake list is full; it waits for the next block.
+    return player->shake(static_cast<int>(c.object), static_cast<float>(c.impulse),
+                         at <= t ? 0u : static_cast<uint32_t>(at - t));
+  });
+  keep_if([&](const Command& c) {
+    if (c.kind != Kind::Impact) return false;
+    const uint64_t at = sample_of(c);
+    if (at >= t + frames) return false;
+    if (!player->active(c.object)) return true;
+    // The filterbank takes so many kicks per call: the rest wait for the next block.
+    if (synth.pending_excitations() + player->mode_count(c.object) > synth.excitation_capacity())
+      return false;
+    ImpactEvent ev;
+    ev.impulse = c.impulse;
+    ev.direction = {c.a[0], c.a[1], c.a[2]};
+    if (c.vertex >= 0)
+      ev.vertex = static_cast<std::size_t>(c.vertex);
+    else
+      ev.point = Vec3{c.b[0], c.b[1], c.b[2]};
+    ev.contact_time = c.contact;
+    // A late impact (its first sample has passed) is struck at once.
+    player->impact(c.object, ev,
+                   at <= t ? 0.0 : c.time * config.sample_rate - static_cast<double>(t));
+    return true;
+  });
+}
+
+extern "C" {
+
+void chladni_config_default(chladni_config* c) {
+  if (c)
+    *c = chladni_config{CHLADNI_BACKEND_CPU, 48000, 256, 2, 65536, 256, 4096, 256, 0, 4096, 64};
+}
+
+const char* chladni_last_error(void) {
+  return g_error.c_str();
+}
+
+chladni_status chladni_runtime_create(const chladni_config* config, chladni_runtime** out) {
+  return capi::guarded("chladni_runtime_create", [&] {
+    if (!config || !out) throw InputError("config and out must not be null");
+    *out = nullptr;
+    check_config(*config);
+    *out = new chladni_runtime(*config);
+    return CHLADNI_OK;
+  });
+}
+
+void chladni_runtime_destroy(chladni_runtime* rt) {
+  delete rt;
+}
+
+const char* chladni_runtime_backend(const chladni_runtime* rt) {
+  return rt ? rt->name.c_str() : "";
+}
+
+chladni_status chladni_render(chladni_runtime* rt, float* out, uint32_t frames) {
+  if (!rt || (!out && frames)) return capi::fail(CHLADNI_INPUT_ERROR, "chladni_render: null");
+  return capi::guarded("chladni_render", [&] {
+    rt->drain();
+    const int ch = rt->config.channels;
+    while (frames > 0) {
+      const uint32_t n = rt->until_next_pose(std::min(frames, rt->config.block_size));
+      rt->apply_due(rt->now, n);
+      rt->player->render(n, out);
+      out += static_cast<std::size_t>(n) * ch;
+      frames -= n;
+      rt->now += n;
+    }
+    rt->clock.store(rt->now, std::memory_order_release);
+    return CHLADNI_OK;
+  });
+}
+
+double chladni_time(const chladni_runtime* rt) {
+  return rt ? static_cast<double>(rt->clock.load(std::memory_order_acquire)) /
+                  rt->config.sample_rate
+            : 0.0;
+}
+
+}  // extern "C"

@@ -1,0 +1,155 @@
+#pragma once
+// A live scene: sounding objects placed in the world and a listener. The one place that turns
+// objects into voices, poses into per-mode listener gains (transfer where its fit is usable,
+// else the compact-source gain over distance; scene_objects.hpp) and constant-power pan, and
+// impacts into strikes with their contact force; its shakers (PhISEM particles in or at an
+// object) share the filterbank through their own slot lease and follow the objects' gains.
+// SceneTimeline drives one from a Scene's timeline; an engine drives one directly.
+//
+// Threading: add_object() and add_shaker() allocate (a control thread, never during render());
+// move(), set_listener(), impact(), shake() and render() do not allocate once objects are added.
+#include <chrono>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "chladni/core/scene.hpp"
+#include "chladni/runtime/modal/synth.hpp"
+#include "chladni/runtime/modal/transfer_gains.hpp"
+#include "chladni/runtime/phisem/shaker_bank.hpp"
+#include "chladni/runtime/scene/render.hpp"
+#include "chladni/runtime/thread_pool.hpp"
+
+namespace chladni::gpu {
+class Context;
+}
+
+namespace chladni::runtime {
+
+struct PlayerOptions {
+  double sample_rate = 48000;
+  double gain = 1.0;  ///< scales every object
+  SynthOptions synth;
+  /// Listener gains on this device once the objects with transfer have gpu_gain_modes modes
+  /// (null: always on the CPU); far-field maps on the CPU from map_gain_modes modes.
+  std::shared_ptr<gpu::Context> gain_device;
+  std::size_t gpu_gain_modes = 20000;
+  std::size_t map_gain_modes = 4096;
+  /// Filterbank slots and voices for shakers, leased before the synth's (0: no shakers). A GPU
+  /// filterbank needs max_streams() >= max_shakers: the particles are then made on the device.
+  uint32_t shaker_slots = 0;
+  uint32_t max_shakers = 0;
+  uint64_t seed = 1;  ///< the shakers' random streams
+};
+
+class ScenePlayer {
+ public:
+  /// The player's voices take the synth's budget of `filterbank` (options.synth).
+  ScenePlayer(Filterbank& filterbank, const PlayerOptions& options);
+  ~ScenePlayer();
+
+  /// Adds an object (its modes, pose and gain); returns its index. Objects sharing a Transfer
+  /// share its coefficients and maps. Control thread.
+  std::size_t add_object(const ObjectModes& modes, const Vec3& position, const Quat& orientation,
+                         double gain = 1.0);
+  /// Silences an object: its gains ramp to zero over the filterbank's gain ramp, then its slots
+  /// are freed. Commands for it are refused from then on.
+  void remove(std::size_t object);
+  bool active(std::size_t object) const { return objects_.at(object).voice >= 0; }
+  /// Prepares the listener-gain tables for the objects added so far (maps, device buffers);
+  /// done by the first update otherwise. Control thread.
+  void finish_objects();
+
+  /// Adds a shaker at `object`: a voice whose resonances are the object's modes (`resonate`:
+  /// they take the object's listener gains) or an instrument's own (they take the object's
+  /// distance spreading); both take its pan. Silent until shaken. Control thread.
+  int add_shaker(std::size_t object, const ShakerVoice& voice, bool resonate);
+  /// Adds `energy` (0-1) to a shaker at fractional sample `offset` of the next render; false
+  /// when it cannot be taken this render (the shake list is full) or the shaker's object was
+  /// removed.
+  bool shake(int shaker, float energy, uint32_t offset);
+  std::size_t shaker_count() const { return shakers_.size(); }
+  std::size_t shaker_object(int shaker) const { return shakers_.at(shaker).object; }
+
+  void move(std::size_t object, const Vec3& position, const Quat& orientation);
+  void set_listener(const Listener& listener);
+  /// Strikes `object`: the event's point or vertex, direction, impulse and contact time, from
+  /// fractional sample `start` of the next render (-1 < start < max_frames()).
+  void impact(std::size_t object, const ImpactEvent& event, double start);
+
+  /// Recomputes the listener gains when a pose changed since the last update; true if it did.
+  bool update_gains();
+  /// Renders `frames` interleaved frames (updating gains first if needed), shakers included.
+  void render(uint32_t frames, float* out);
+
+  /// The last update's per-mode gains and pan of an object, and its distance spreading (gain /
+  /// distance): for other voices placed at the object (shakers).
+  std::span<const float> gains(std::size_t object) const { return objects_[object].gains; }
+  const float* pan(std::size_t object) const { return objects_[object].pan; }
+  double spreading(std::size_t object) const { return objects_[object].spread; }
+
+  const Vec3& position(std::size_t object) const { return objects_.at(object).position; }
+  const Quat& orientation(std::size_t object) const { return objects_.at(object).orientation; }
+  const Listener& listener() const { return listener_; }
+  Synth& synth() { return synth_; }
+  const Synth& synth() const { return synth_; }
+  std::size_t object_count() const { return objects_.size(); }
+  std::size_t mode_count(std::size_t object) const { return objects_.at(object).gains.size(); }
+  const ObjectModes& modes(std::size_t object) const { return objects_.at(object).modes; }
+  /// Surface points an impact may name by vertex (0 without geometry).
+  std::size_t points(std::size_t object) const {
+    const ObjectModes& m = objects_.at(object).modes;
+    return m.model && m.model->has_geometry() ? m.model->points.size() : 0;
+  }
+  uint64_t gain_updates() const { return gain_updates_; }
+  double gain_seconds() const { return gain_seconds_; }
+  /// "cpu", "gpu" or "" when no object has transfer.
+  std::string gain_backend() const;
+
+ private:
+  struct Object {
+    ObjectModes modes;
+    Synth::VoiceId voice = -1;
+    Synth::VoiceId fading = -1;  // a removed object's voice until its fade ends
+    uint64_t fade_end = 0;
+    Vec3 position{0, 0, 0};
+    Quat orientation{1, 0, 0, 0};
+    double gain = 1;
+    int table = -1;  // index in table_.objects
+    std::vector<float> gains;
+    std::vector<std::complex<float>> coupling;
+    float pan[2] = {1, 1};
+    double spread = 1;
+  };
+  struct Shaker {
+    std::size_t object;
+    bool resonate;
+    std::size_t resonances;
+  };
+  void apply_gains(Object& object);
+  void apply_shaker_gains(int shaker);
+
+  Filterbank& fb_;
+  PlayerOptions opt_;
+  std::unique_ptr<ShakerBank> bank_;  // leases its slots before the synth
+  Synth synth_;
+  std::vector<Shaker> shakers_;
+  std::size_t fading_ = 0;   // removed objects still fading out
+  std::vector<float> flat_;  // an instrument shaker's gains, one per resonance
+  std::vector<Object> objects_;
+  Listener listener_;
+  bool dirty_ = true;
+  // Listener gains from transfer.
+  TransferTable table_;
+  ListenerFrame frame_;
+  std::vector<Vec3> listener_local_;
+  std::vector<float> table_gains_;
+  std::unique_ptr<ThreadPool> pool_;
+  std::unique_ptr<GpuTransferGains> gpu_gains_;
+  bool tables_ready_ = false;
+  uint64_t gain_updates_ = 0;
+  double gain_seconds_ = 0;
+};
+
+}  // namespace chladni::runtime

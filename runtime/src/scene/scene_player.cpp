@@ -1,0 +1,225 @@
+#include "chladni/runtime/scene/scene_player.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <thread>
+
+#include "chladni/core/error.hpp"
+#include "chladni/runtime/scene/scene_objects.hpp"
+
+namespace chladni::runtime {
+namespace {
+
+// Spherical spreading relative to 1 m, clamped so an object at the listener stays finite.
+constexpr double kMinDistance = 0.1;
+// Listener-gain tables this large spread their updates over all cores.
+constexpr std::size_t kThreadedGainModes = 4096;
+
+std::unique_ptr<ShakerBank> make_bank(Filterbank& fb, const PlayerOptions& o) {
+  if (o.shaker_slots == 0 || o.max_shakers == 0) return nullptr;
+  ShakerBankOptions bo;
+  bo.sample_rate = o.sample_rate;
+  bo.slots = o.shaker_slots;
+  bo.max_voices = o.max_shakers;
+  bo.seed = o.seed;
+  bo.excitation = fb.device() ? ExcitationBackend::Gpu : ExcitationBackend::Cpu;
+  return std::make_unique<ShakerBank>(fb, bo);
+}
+
+}  // namespace
+
+ScenePlayer::ScenePlayer(Filterbank& fb, const PlayerOptions& o)
+    : fb_(fb), opt_(o), bank_(make_bank(fb, o)), synth_(fb, o.synth) {
+  if (!std::isfinite(o.gain)) throw InputError("scene gain must be finite");
+  shakers_.reserve(o.max_shakers);
+}
+
+ScenePlayer::~ScenePlayer() = default;
+
+std::size_t ScenePlayer::add_object(const ObjectModes& modes, const Vec3& position,
+                                    const Quat& orientation, double gain) {
+  if (!std::isfinite(gain)) throw InputError("object gain must be finite");
+  if (modes.transfer && modes.transfer->mode_count() != modes.modes.size())
+    throw InternalError("player: transfer and modes differ in count");
+  Object o;
+  o.modes = modes;
+  o.voice = synth_.start_voice(modes.modes);
+  o.position = position;
+  o.orientation = orientation;
+  o.gain = gain;
+  o.gains.assign(modes.modes.size(), 0.0f);
+  o.coupling.assign(modes.modes.size(), {0.0f, 0.0f});
+  objects_.push_back(std::move(o));
+  tables_ready_ = false;
+  dirty_ = true;
+  return objects_.size() - 1;
+}
+
+void ScenePlayer::finish_objects() {
+  std::size_t transfer_modes = 0;
+  for (const Object& o : objects_)
+    if (o.modes.transfer) transfer_modes += o.modes.modes.size();
+  const bool on_device = opt_.gain_device && transfer_modes >= opt_.gpu_gain_modes;
+  pool_ = std::make_unique<ThreadPool>(transfer_modes >= kThreadedGainModes
+                                           ? int(std::max(1u, std::thread::hardware_concurrency()))
+                                           : 1);
+  table_ = TransferTable{};
+  // Maps pay for their build once many modes are updated; the device streams the series.
+  if (on_device || transfer_modes < opt_.map_gain_modes) table_.map_options.reset();
+  for (std::size_t k = 0; k < objects_.size(); ++k) {
+    Object& o = objects_[k];
+    o.table = -1;
+    if (!o.modes.transfer) continue;
+    std::size_t same = 0;
+    while (same < k && objects_[same].modes.transfer != o.modes.transfer) ++same;
+    o.table = static_cast<int>(same < k ? table_.add_instance(objects_[same].table)
+                                        : table_.add(*o.modes.transfer, pool_.get()));
+  }
+  listener_local_.assign(table_.objects.size(), Vec3{0, 0, 0});
+  table_gains_.assign(table_.mode_count(), 0.0f);
+  gpu_gains_.reset();
+  if (on_device) gpu_gains_ = std::make_unique<GpuTransferGains>(opt_.gain_device, table_);
+  // Size the frame's scratch now: updates then allocate nothing.
+  if (table_.mode_count() > 0) frame_.update(table_, listener_local_, gpu_gains_ != nullptr);
+  tables_ready_ = true;
+  dirty_ = true;
+}
+
+std::string ScenePlayer::gain_backend() const {
+  return table_.mode_count() == 0 ? "" : gpu_gains_ ? "gpu" : "cpu";
+}
+
+int ScenePlayer::add_shaker(std::size_t object, const ShakerVoice& voice, bool resonate) {
+  if (!bank_) throw InputError("the player has no room for shakers (shaker_slots)");
+  const Object& o = objects_.at(object);
+  if (o.voice < 0) throw InputError("object " + std::to_string(object) + " was removed");
+  if (resonate && voice.resonances.size() != o.modes.modes.size())
+    throw InternalError("player: a resonating shaker needs one resonance per mode");
+  const int k = bank_->add_voice(voice);
+  shakers_.push_back({object, resonate, voice.resonances.size()});
+  flat_.resize(std::max(flat_.size(), voice.resonances.size()));
+  dirty_ = true;
+  return k;
+}
+
+bool ScenePlayer::shake(int k, float energy, uint32_t offset) {
+  if (!bank_ || k < 0 || static_cast<std::size_t>(k) >= shakers_.size()) return false;
+  if (objects_[shakers_[k].object].voice < 0) return false;
+  return bank_->shake(k, energy, offset);
+}
+
+void ScenePlayer::apply_shaker_gains(int k) {
+  const Shaker& sh = shakers_[k];
+  const Object& o = objects_[sh.object];
+  if (o.voice < 0) {  // removed: silent from now on
+    std::fill(flat_.begin(), flat_.end(), 0.0f);
+    bank_->set_gains(k, std::span(flat_).first(sh.resonances), 0, 0);
+  } else if (sh.resonate) {
+    bank_->set_gains(k, o.gains, o.pan[0], o.pan[1]);
+  } else {
+    std::fill(flat_.begin(), flat_.end(), static_cast<float>(o.spread));
+    bank_->set_gains(k, std::span(flat_).first(sh.resonances), o.pan[0], o.pan[1]);
+  }
+}
+
+void ScenePlayer::move(std::size_t k, const Vec3& position, const Quat& orientation) {
+  Object& o = objects_.at(k);
+  o.position = position;
+  o.orientation = orientation;
+  dirty_ = true;
+}
+
+void ScenePlayer::remove(std::size_t k) {
+  Object& o = objects_.at(k);
+  if (o.voice < 0) return;
+  // Fade out over the gain ramp, then free the slots (render()); at once without a ramp.
+  std::fill(o.gains.begin(), o.gains.end(), 0.0f);
+  synth_.set_mode_gains(o.voice, o.gains);
+  if (fb_.gain_ramp() == 0) {
+    synth_.stop_voice(o.voice);
+  } else {
+    o.fading = o.voice;
+    o.fade_end = synth_.time() + fb_.gain_ramp();
+    ++fading_;
+  }
+  o.voice = -1;
+  for (std::size_t s = 0; s < shakers_.size(); ++s)
+    if (shakers_[s].object == k) apply_shaker_gains(static_cast<int>(s));
+}
+
+void ScenePlayer::set_listener(const Listener& listener) {
+  listener_ = listener;
+  dirty_ = true;
+}
+
+void ScenePlayer::impact(std::size_t k, const ImpactEvent& event, double start) {
+  Object& o = objects_.at(k);
+  if (o.voice < 0) throw InputError("object " + std::to_string(k) + " was removed");
+  update_gains();  // the modes this strike makes resident take the current gains
+  impact_coupling(o.modes, event, o.coupling);
+  synth_.strike(o.voice, o.coupling, start, event.contact_time);
+}
+
+void ScenePlayer::apply_gains(Object& o) {
+  if (o.voice < 0) return;
+  // Listener frame: right = forward x up.
+  const Vec3 right = cross(listener_.forward, listener_.up);
+  const double rn = std::sqrt(dot(right, right));
+  const Vec3 d = sub(o.position, listener_.position);
+  const double r = std::sqrt(dot(d, d));
+  const double g = opt_.gain * o.gain;
+  o.spread = g / std::max(r, kMinDistance);
+  std::span<const float> xfer;
+  if (o.table >= 0)
+    xfer = std::span(table_gains_).subspan(table_.objects[o.table].first_mode, o.gains.size());
+  listener_mode_gains(o.modes, xfer, g, o.spread, o.gains);
+  synth_.set_mode_gains(o.voice, o.gains);
+  if (fb_.channels() == 2) {
+    const double s = r > 1e-9 && rn > 0 ? std::clamp(dot(d, right) / (r * rn), -1.0, 1.0) : 0.0;
+    const double theta = (s + 1.0) * std::numbers::pi / 4.0;  // constant-power pan
+    o.pan[0] = static_cast<float>(std::cos(theta));
+    o.pan[1] = static_cast<float>(std::sin(theta));
+    synth_.set_pan(o.voice, o.pan[0], o.pan[1]);
+  }
+}
+
+bool ScenePlayer::update_gains() {
+  if (!dirty_) return false;
+  if (!tables_ready_) finish_objects();
+  const auto t0 = std::chrono::steady_clock::now();
+  for (const Object& o : objects_) {
+    if (o.table >= 0)
+      listener_local_[o.table] = rotate_inverse(o.orientation, sub(listener_.position, o.position));
+  }
+  if (table_.mode_count() > 0) {
+    frame_.update(table_, listener_local_, gpu_gains_ != nullptr);
+    if (gpu_gains_)
+      gpu_gains_->compute(frame_, table_gains_);
+    else
+      transfer_gains(table_, frame_, table_gains_, pool_.get());
+  }
+  for (Object& o : objects_) apply_gains(o);
+  for (std::size_t s = 0; s < shakers_.size(); ++s) apply_shaker_gains(static_cast<int>(s));
+  dirty_ = false;
+  ++gain_updates_;
+  gain_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return true;
+}
+
+void ScenePlayer::render(uint32_t frames, float* out) {
+  update_gains();
+  const DriveInput drive = bank_ ? bank_->prepare(frames) : DriveInput{};
+  synth_.render(frames, out, drive);
+  if (bank_) bank_->finish(frames);
+  for (std::size_t k = 0; fading_ > 0 && k < objects_.size(); ++k) {
+    Object& o = objects_[k];
+    if (o.fading >= 0 && synth_.time() >= o.fade_end) {
+      synth_.stop_voice(o.fading);
+      o.fading = -1;
+      --fading_;
+    }
+  }
+}
+
+}  // namespace chladni::runtime
