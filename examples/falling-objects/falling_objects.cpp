@@ -1,11 +1,14 @@
 // Falling objects: Bullet drops sounding objects onto a floor and into each other; every new
-// contact becomes an impact through Chladni's C API, posted at the physics step's time, and the
-// audio is rendered in step with the simulation (200 frames per 1/240 s step at 48 kHz).
+// contact becomes an impact through Chladni's C API, posted at the physics step's time; a body
+// sliding on a contact scrapes (a shaker of sandpaper grains ringing its modes, shaken in
+// proportion to the sliding speed); the audio is rendered in step with the simulation (200
+// frames per 1/240 s step at 48 kHz).
 // Writes a stereo float WAV (normalized to -1 dBFS; the peak in pascals is printed) and a
 // frame-by-frame event log (CSV), and prints when the first impact happened and when the first
 // sound starts.
 //
-// Usage: falling_objects [BANK.chbank ...] [--seconds S] [-o OUT.wav] [--log EVENTS.csv]
+// Usage: falling_objects [BANK.chbank ...] [--seconds S] [--no-scrape] [-o OUT.wav]
+//                        [--log EVENTS.csv]
 // Without banks, three bodies sound with inline modes (a tile, a block, a rod).
 #include <btBulletDynamicsCommon.h>
 
@@ -25,6 +28,8 @@ namespace {
 
 constexpr double kRate = 48000, kStep = 1.0 / 240;
 constexpr uint32_t kFramesPerStep = 200;
+// Sliding slower than this is resting; at kFullSlip the grains get all the energy a shake adds.
+constexpr double kMinSlip = 0.02, kFullSlip = 1.0;  // m/s
 
 void check(chladni_status s, const char* what) {
   if (s != CHLADNI_OK) throw std::runtime_error(std::string(what) + ": " + chladni_last_error());
@@ -32,7 +37,9 @@ void check(chladni_status s, const char* what) {
 
 struct Body {
   uint32_t object = 0;
-  btVector3 centre;  // the box's centre in the bank's frame: the body's origin
+  uint32_t scrape = 0;  // its shaker: grains on its surface
+  double slip = 0;      // this step's fastest sliding contact (m/s)
+  btVector3 centre;     // the box's centre in the bank's frame: the body's origin
   std::unique_ptr<btCollisionShape> shape;
   std::unique_ptr<btDefaultMotionState> motion;
   std::unique_ptr<btRigidBody> rigid;
@@ -63,6 +70,12 @@ Body make_body(chladni_runtime* rt, chladni_bank* bank, btVector3 half, const bt
   b.rigid = std::make_unique<btRigidBody>(info);
   const double pos[3] = {at.x(), at.y(), at.z()}, ori[4] = {q.w(), q.x(), q.y(), q.z()};
   check(chladni_spawn(rt, bank, pos, ori, 1.0, &b.object), "spawn");
+  chladni_shaker_desc grains{};
+  grains.object = b.object;
+  grains.instrument = "sandpaper";
+  grains.resonate_object = 1;
+  grains.impulse = 5e-5;  // N s per grain: sliding stays below the impacts that start it
+  check(chladni_shaker_add(rt, &grains, &b.scrape), "shaker");
   return b;
 }
 
@@ -74,6 +87,14 @@ void post_pose(chladni_runtime* rt, const Body& b, double time) {
   const btQuaternion q = t.getRotation();
   const double pos[3] = {origin.x(), origin.y(), origin.z()}, ori[4] = {q.w(), q.x(), q.y(), q.z()};
   check(chladni_post_move(rt, b.object, time, pos, ori), "move");
+}
+
+// Speed of `o`'s surface at world point `p`.
+btVector3 surface_velocity(const btCollisionObject* o, const btVector3& p) {
+  const btRigidBody* rb = btRigidBody::upcast(o);
+  if (!rb) return btVector3(0, 0, 0);
+  return rb->getLinearVelocity() +
+         rb->getAngularVelocity().cross(p - rb->getCenterOfMassPosition());
 }
 
 void write_wav(const std::string& path, const std::vector<float>& samples, int channels) {
@@ -96,11 +117,14 @@ void write_wav(const std::string& path, const std::vector<float>& samples, int c
 int main(int argc, char** argv) try {
   std::vector<std::string> banks;
   double seconds = 3;
+  bool scrape = true;
   std::string wav = "falling_objects.wav", log_path = "falling_objects.csv";
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--seconds" && i + 1 < argc)
       seconds = std::stod(argv[++i]);
+    else if (a == "--no-scrape")
+      scrape = false;
     else if (a == "-o" && i + 1 < argc)
       wav = argv[++i];
     else if (a == "--log" && i + 1 < argc)
@@ -162,7 +186,9 @@ int main(int argc, char** argv) try {
 
   FILE* log = std::fopen(log_path.c_str(), "w");
   if (!log) throw std::runtime_error("cannot write " + log_path);
-  std::fprintf(log, "frame,time_s,object,impulse_Ns,x,y,z,nx,ny,nz\n");
+  // impact: amount is the impulse (N s), the point and normal in the bank's frame;
+  // scrape: amount is the shake's energy, x the sliding speed (m/s).
+  std::fprintf(log, "frame,time_s,kind,object,amount,x,y,z,nx,ny,nz\n");
   std::vector<float> audio, block(kFramesPerStep * 2);
   double first_impact = -1;
   const uint64_t steps = static_cast<uint64_t>(seconds / kStep);
@@ -175,6 +201,15 @@ int main(int argc, char** argv) try {
       const btPersistentManifold* man = dispatcher.getManifoldByIndexInternal(m);
       for (int c = 0; c < man->getNumContacts(); ++c) {
         const btManifoldPoint& pt = man->getContactPoint(c);
+        if (pt.getLifeTime() > 1 && pt.getAppliedImpulse() > 0) {  // a lasting contact: sliding?
+          const btVector3 rel = surface_velocity(man->getBody0(), pt.getPositionWorldOnA()) -
+                                surface_velocity(man->getBody1(), pt.getPositionWorldOnB());
+          const btVector3& n = pt.m_normalWorldOnB;
+          const double slip = (rel - n * rel.dot(n)).length();
+          for (Body& b : bodies)
+            if (b.rigid.get() == man->getBody0() || b.rigid.get() == man->getBody1())
+              b.slip = std::max(b.slip, slip);
+        }
         if (pt.getLifeTime() != 1 || pt.getAppliedImpulse() < 1e-4f) continue;
         for (int side = 0; side < 2; ++side) {
           const btCollisionObject* o = side == 0 ? man->getBody0() : man->getBody1();
@@ -196,11 +231,20 @@ int main(int argc, char** argv) try {
           im.contact_time = 0.0005;
           check(chladni_post_impact(rt, &im), "impact");
           if (first_impact < 0) first_impact = t;
-          std::fprintf(log, "%llu,%.6f,%u,%.6g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+          std::fprintf(log, "%llu,%.6f,impact,%u,%.6g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
                        static_cast<unsigned long long>(s), t, it->object, im.impulse, local.x(),
                        local.y(), local.z(), dir.x(), dir.y(), dir.z());
         }
       }
+    }
+    for (Body& b : bodies) {
+      if (scrape && b.slip > kMinSlip) {
+        const double energy = std::min(1.0, b.slip / kFullSlip);
+        check(chladni_post_shake(rt, b.scrape, t, energy), "scrape");
+        std::fprintf(log, "%llu,%.6f,scrape,%u,%.4f,%.4f,,,,,\n",
+                     static_cast<unsigned long long>(s), t, b.object, energy, b.slip);
+      }
+      b.slip = 0;
     }
     check(chladni_render(rt, block.data(), kFramesPerStep), "render");
     audio.insert(audio.end(), block.begin(), block.end());
