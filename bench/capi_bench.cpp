@@ -1,9 +1,12 @@
 // The C API under a game's load: N live objects of M modes, impacts at R per second (Poisson,
 // a third with a contact time), the listener moving every 50 ms, rendered block by block as an
 // audio callback would. Prints mean, 99th percentile and worst render time per block against
-// the block's duration.
+// the block's duration. --pace 1 calls render at each block's real-time deadline, as an audio
+// device does (the time between calls is then free for a pipelined GPU's work); --pipeline 0
+// makes the GPU backend wait for each block.
 // Usage: chladni_capi_bench [--backend cpu|gpu] [--seconds 60] [--objects 64] [--modes 500]
-//                           [--rate 200] [--block 256] [--threads 0] [--json OUT]
+//                           [--rate 200] [--block 256] [--threads 0] [--pace 0|1]
+//                           [--pipeline 0|1] [--json OUT]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -13,6 +16,7 @@
 #include <nlohmann/json.hpp>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "chladni/chladni.h"
@@ -24,6 +28,7 @@ struct Args {
   double seconds = 60, rate = 200;
   uint32_t objects = 64, modes = 500, block = 256;
   int threads = 0;
+  int pace = 0, pipeline = 1;
 };
 
 Args parse(int argc, char** argv) {
@@ -44,6 +49,10 @@ Args parse(int argc, char** argv) {
       a.block = static_cast<uint32_t>(std::stoul(v));
     else if (k == "--threads")
       a.threads = std::stoi(v);
+    else if (k == "--pace")
+      a.pace = std::stoi(v);
+    else if (k == "--pipeline")
+      a.pipeline = std::stoi(v);
     else if (k == "--json")
       a.json = v;
     else
@@ -68,6 +77,7 @@ int main(int argc, char** argv) try {
   c.threads = a.threads;
   c.max_objects = a.objects;
   c.mode_budget = std::max<uint32_t>(65536, a.objects * a.modes);
+  c.gpu_pipeline = a.pipeline;
   chladni_runtime* rt = nullptr;
   if (!ok(chladni_runtime_create(&c, &rt), "create")) return 1;
   std::mt19937 rng(7);
@@ -97,7 +107,10 @@ int main(int argc, char** argv) try {
   std::vector<double> ms;
   ms.reserve(blocks);
   uint64_t impacts = 0, full = 0;
+  const auto start = std::chrono::steady_clock::now();
   for (uint64_t b = 0; b < blocks; ++b) {
+    if (a.pace)
+      std::this_thread::sleep_until(start + std::chrono::duration<double>(double(b) * block_s));
     const double t = chladni_time(rt), end = t + block_s;
     for (; next_hit < end; next_hit += gap(rng)) {  // the game thread's posts for this block
       chladni_impact im{};
@@ -130,10 +143,10 @@ int main(int argc, char** argv) try {
   const double budget = 1e3 * block_s;
   std::printf(
       "%s: %u objects x %u modes, %.0f impacts/s (%llu posted, %llu refused: queue full), "
-      "block %u (%.2f ms)\n",
+      "block %u (%.2f ms), output latency %.2f ms%s\n",
       chladni_runtime_backend(rt), a.objects, a.modes, a.rate,
       static_cast<unsigned long long>(impacts), static_cast<unsigned long long>(full), a.block,
-      budget);
+      budget, 1e3 * chladni_latency(rt), a.pace ? ", paced at real time" : "");
   std::printf(
       "render per block: mean %.3f ms, p99 %.3f ms, worst %.3f ms at block %lld (%.1fx real "
       "time on the mean, %llu blocks over budget)\n",
@@ -151,6 +164,8 @@ int main(int argc, char** argv) try {
                         {"p99_ms", p99},
                         {"worst_ms", worst},
                         {"budget_ms", budget},
+                        {"latency_ms", 1e3 * chladni_latency(rt)},
+                        {"paced", a.pace != 0},
                         {"impacts", impacts}};
     std::ofstream(a.json) << j.dump(2) << "\n";
   }

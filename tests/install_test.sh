@@ -23,6 +23,14 @@ PKG_CONFIG_PATH=$(dirname "$(find "$tmp/prefix" -name chladni.pc)")
 export PKG_CONFIG_PATH
 cc -std=c11 -c "$src/examples/embedding/minimal.c" $(pkg-config --cflags chladni) -o "$tmp/m.o"
 c++ "$tmp/m.o" $(pkg-config --libs chladni) -o "$tmp/minimal_pc"
+# The runtime carries no GPL code: an engine's binary links neither FFTW nor the precompute side.
+for bin in "$tmp/embed/minimal_c" "$tmp/embed/minimal_cpp" "$tmp/minimal_pc"; do
+  if ldd "$bin" | grep -Eiq 'fftw|tet|cgal|cholmod|hmat'; then
+    echo "$bin links a GPL/AGPL library:" >&2
+    ldd "$bin" >&2
+    exit 1
+  fi
+done
 "$tmp/minimal_pc"
 # The example host (Bullet): its first sound starts with its first impact, within 1 ms.
 cmake -S "$src/examples/falling-objects" -B "$tmp/falling" -G Ninja -DCMAKE_BUILD_TYPE=Release \

@@ -31,6 +31,7 @@ std::unique_ptr<Filterbank> make_filterbank(const chladni_config& c) {
         o.gain_ramp = c.gain_ramp;
         o.capacity = c.mode_budget + c.shaker_slots;
         o.max_streams = c.shaker_slots ? c.max_shakers : 0;
+        o.pipelined = c.gpu_pipeline != 0;
         return std::make_unique<GpuFilterbank>(ctx, o);
       }
     } catch (const gpu::NoDeviceError&) {
@@ -60,6 +61,7 @@ void check_config(const chladni_config& c) {
     throw InputError("queue_capacity must be in [1, 2^24]");
   if (c.gain_ramp > 65536) throw InputError("gain_ramp must be at most 65536");
   if (c.threads < 0 || c.threads > 1024) throw InputError("threads must be in [0, 1024]");
+  if (c.gpu_pipeline != 0 && c.gpu_pipeline != 1) throw InputError("gpu_pipeline must be 0 or 1");
   if (c.shaker_slots > (1u << 20)) throw InputError("shaker_slots must be at most 2^20");
   if (c.shaker_slots && (c.max_shakers < 1 || c.max_shakers > 4096))
     throw InputError("max_shakers must be in [1, 4096] when shaker_slots > 0");
@@ -175,7 +177,7 @@ extern "C" {
 
 void chladni_config_default(chladni_config* c) {
   if (c)
-    *c = chladni_config{CHLADNI_BACKEND_CPU, 48000, 256, 2, 65536, 256, 4096, 256, 0, 4096, 64};
+    *c = chladni_config{CHLADNI_BACKEND_CPU, 48000, 256, 2, 65536, 256, 4096, 256, 0, 4096, 64, 1};
 }
 
 const char* chladni_last_error(void) {
@@ -206,7 +208,7 @@ chladni_status chladni_render(chladni_runtime* rt, float* out, uint32_t frames) 
     rt->drain();
     const int ch = rt->config.channels;
     while (frames > 0) {
-      const uint32_t n = rt->until_next_pose(std::min(frames, rt->config.block_size));
+      const uint32_t n = rt->until_next_pose(std::min(frames, rt->fb->max_frames()));
       rt->apply_due(rt->now, n);
       rt->player->render(n, out);
       out += static_cast<std::size_t>(n) * ch;
@@ -216,6 +218,10 @@ chladni_status chladni_render(chladni_runtime* rt, float* out, uint32_t frames) 
     rt->clock.store(rt->now, std::memory_order_release);
     return CHLADNI_OK;
   });
+}
+
+double chladni_latency(const chladni_runtime* rt) {
+  return rt ? rt->fb->latency() / rt->config.sample_rate : 0.0;
 }
 
 double chladni_time(const chladni_runtime* rt) {

@@ -52,7 +52,8 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
       local_(o.workgroup_size),
       mpi_(o.modes_per_invocation),
       max_streams_(o.max_streams),
-      gain_ramp_(o.gain_ramp) {
+      gain_ramp_(o.gain_ramp),
+      pipelined_(o.pipelined) {
   static_assert(sizeof(Update) == 48, "matches apply_updates.comp");
   if (!ctx_) throw std::invalid_argument("GpuFilterbank needs a Vulkan context");
   if (capacity_ == 0) throw std::invalid_argument("filterbank capacity must be > 0");
@@ -98,8 +99,9 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   result_ = std::make_unique<gpu::Buffer>(c, uint64_t{max_frames_} * channels_ * sizeof(float),
                                           gpu::Memory::HostVisible);
   max_updates_ = std::min(capacity_, 1u << 16);
-  updates_ = std::make_unique<gpu::Buffer>(c, uint64_t{max_updates_} * sizeof(Update),
-                                           gpu::Memory::HostVisible);
+  for (auto& u : updates_)
+    u = std::make_unique<gpu::Buffer>(c, uint64_t{max_updates_} * sizeof(Update),
+                                      gpu::Memory::HostVisible);
   drives_ = std::make_unique<gpu::Buffer>(c, uint64_t{groups} * group_modes * 16,
                                           gpu::Memory::DeviceLocal);
   const uint64_t input_bytes = uint64_t{max_streams_} * max_frames_ * sizeof(float);
@@ -138,19 +140,53 @@ GpuFilterbank::GpuFilterbank(std::shared_ptr<gpu::Context> ctx, const GpuFilterb
   reduce_ = std::make_unique<gpu::Pipeline>(c, std::span(k_reduce_spv), 2, sizeof(ReducePush));
   reduce_->bind(0, *scratch_);
   reduce_->bind(1, *result_);
-  apply_ =
-      std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 5, 2 * sizeof(uint32_t));
-  apply_->bind(0, *modes_);
-  apply_->bind(1, *gains_);
-  apply_->bind(2, *updates_);
-  apply_->bind(3, *drives_);
-  apply_->bind(4, *targets_);
+  for (int k = 0; k < 2; ++k) {
+    apply_[k] =
+        std::make_unique<gpu::Pipeline>(c, std::span(k_apply_updates_spv), 5, 2 * sizeof(uint32_t));
+    apply_[k]->bind(0, *modes_);
+    apply_[k]->bind(1, *gains_);
+    apply_[k]->bind(2, *updates_[k]);
+    apply_[k]->bind(3, *drives_);
+    apply_[k]->bind(4, *targets_);
+  }
   seq_ = std::make_unique<gpu::Sequence>(c, 4);
+  if (pipelined_) {
+    // The output lags by max_frames: that many samples of silence come first.
+    fifo_.assign(2 * std::size_t{max_frames_} * channels_, 0.0f);
+    fifo_size_ = std::size_t{max_frames_} * channels_;
+  }
   pending_index_.assign(capacity_, kNone);
   stream_.assign(capacity_, kNone);
 }
 
-GpuFilterbank::~GpuFilterbank() = default;
+GpuFilterbank::~GpuFilterbank() {
+  if (seq_ && seq_->pending()) seq_->wait();
+}
+
+uint32_t GpuFilterbank::latency() const {
+  return pipelined_ ? max_frames_ : 0;
+}
+
+void GpuFilterbank::set_input_stage(GpuInputStage* stage) {
+  // A stage's host-side state (a particle count read after each block) would race the block in
+  // flight.
+  if (stage && pipelined_)
+    throw std::invalid_argument("a pipelined GPU filterbank takes no device input stage");
+  stage_ = stage;
+}
+
+// Waits for the block in flight and queues its samples (pipelined mode).
+void GpuFilterbank::collect() {
+  if (!in_flight_) return;
+  seq_->wait();
+  in_flight_ = false;
+  timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
+  timing_.kernel_ms = flight_groups_ ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
+  const std::size_t n = std::size_t{flight_frames_} * channels_;
+  const auto* r = static_cast<const float*>(result_->data());
+  for (std::size_t i = 0; i < n; ++i) fifo_[(fifo_head_ + fifo_size_ + i) % fifo_.size()] = r[i];
+  fifo_size_ += n;
+}
 
 std::string GpuFilterbank::name() const {
   return "gpu (" + ctx_->describe() + ")";
@@ -158,7 +194,7 @@ std::string GpuFilterbank::name() const {
 
 GpuFilterbank::Update& GpuFilterbank::pending(uint32_t slot) {
   if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
-  auto* list = static_cast<Update*>(updates_->data());
+  auto* list = static_cast<Update*>(updates_[cur_]->data());
   uint32_t& idx = pending_index_[slot];
   if (idx == kNone) {
     if (update_count_ == max_updates_) flush_updates(true);
@@ -220,18 +256,19 @@ void GpuFilterbank::set_high_water(uint32_t slots) {
 void GpuFilterbank::record_updates() {
   if (!update_count_) return;
   const uint32_t push[2] = {update_count_, gain_ramp_};
-  seq_->dispatch(*apply_, div_up(update_count_, 64), push, sizeof(push));
+  seq_->dispatch(*apply_[cur_], div_up(update_count_, 64), push, sizeof(push));
   seq_->barrier();
 }
 
 void GpuFilterbank::clear_updates() {
-  auto* list = static_cast<Update*>(updates_->data());
+  auto* list = static_cast<Update*>(updates_[cur_]->data());
   for (uint32_t i = 0; i < update_count_; ++i) pending_index_[list[i].slot] = kNone;
   update_count_ = 0;
+  cur_ ^= 1u;  // the next updates go to the list the device is not reading
 }
 
 void GpuFilterbank::ramps_at_once(uint32_t from_slot) {
-  auto* list = static_cast<Update*>(updates_->data());
+  auto* list = static_cast<Update*>(updates_[cur_]->data());
   for (uint32_t i = 0; i < update_count_; ++i)
     if ((list[i].flags & kRampTo) && list[i].slot >= from_slot)
       list[i].flags = (list[i].flags & ~kRampTo) | kGains;
@@ -239,6 +276,7 @@ void GpuFilterbank::ramps_at_once(uint32_t from_slot) {
 
 void GpuFilterbank::flush_updates(bool at_once) {
   if (at_once) ramps_at_once(0);  // an overflowing batch: the ramp would outlive its updates
+  collect();
   seq_->begin();
   record_updates();
   seq_->run();
@@ -247,6 +285,7 @@ void GpuFilterbank::flush_updates(bool at_once) {
 
 std::complex<float> GpuFilterbank::state(uint32_t slot) {
   if (slot >= capacity_) throw std::out_of_range("filterbank slot out of range");
+  collect();
   if (update_count_) flush_updates();
   float m[4];
   modes_->download(m, sizeof(m), uint64_t{slot} * 16);
@@ -256,6 +295,7 @@ std::complex<float> GpuFilterbank::state(uint32_t slot) {
 void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t frames, float* out,
                             const DriveInput& input) {
   if (frames > max_frames_) throw std::invalid_argument("process: frames exceeds max_frames()");
+  collect();  // the host may write the buffers the block in flight reads only after this
   if (input.streams > max_streams_) {
     throw std::invalid_argument("process: more input streams than max_streams()");
   }
@@ -334,12 +374,25 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
     seq_->barrier();
   }
   seq_->timestamp(2);
-  seq_->run();
-  timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
-  timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
-  std::memcpy(out, result_->data(), sizeof(float) * count);
-  clear_updates();
   processed_ += frames;
+  if (!pipelined_) {
+    seq_->run();
+    timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
+    timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
+    std::memcpy(out, result_->data(), sizeof(float) * count);
+    clear_updates();
+    return;
+  }
+  // Pipelined: the device runs this block while the caller goes on; the caller gets the oldest
+  // samples, which the FIFO always holds (it starts with max_frames of silence).
+  seq_->submit();
+  clear_updates();
+  in_flight_ = true;
+  flight_frames_ = frames;
+  flight_groups_ = groups;
+  for (uint32_t i = 0; i < count; ++i) out[i] = fifo_[(fifo_head_ + i) % fifo_.size()];
+  fifo_head_ = (fifo_head_ + count) % fifo_.size();
+  fifo_size_ -= count;
 }
 
 }  // namespace chladni::runtime

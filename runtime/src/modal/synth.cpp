@@ -41,6 +41,11 @@ Synth::Synth(Filterbank& fb, const SynthOptions& o)
   steal_scratch_.reserve(budget_);
   pending_.resize(fb.max_excitations());
   fb_.set_used(lease_, 0);
+  if (fb.latency() > 0) {
+    const std::size_t ch = static_cast<std::size_t>(fb.channels());
+    force_block_.assign(std::size_t{fb.max_frames()} * ch, 0.0f);
+    force_delay_.assign((std::size_t{fb.latency()} + fb.max_frames()) * ch, 0.0f);
+  }
 }
 
 Synth::~Synth() {
@@ -48,6 +53,25 @@ Synth::~Synth() {
     if (slot_voice_[s] >= 0) fb_.clear_mode(lease_.begin + s);
   fb_.set_used(lease_, 0);
   fb_.release(lease_);
+}
+
+void Synth::render_forces(uint32_t frames, float* out) {
+  if (force_delay_.empty()) {
+    forces_.render(now_, frames, fb_.channels(), out, &Synth::contact_gains, this);
+    return;
+  }
+  const std::size_t n = std::size_t{frames} * fb_.channels(), size = force_delay_.size();
+  const std::size_t lag = std::size_t{fb_.latency()} * fb_.channels();
+  std::fill_n(force_block_.begin(), n, 0.0f);
+  forces_.render(now_, frames, fb_.channels(), force_block_.data(), &Synth::contact_gains, this);
+  for (std::size_t i = 0; i < n; ++i) {  // what was written `lag` samples ago
+    float& slot = force_delay_[(delay_head_ + i) % size];
+    out[i] += slot;
+    slot = 0.0f;
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    force_delay_[(delay_head_ + lag + i) % size] = force_block_[i];
+  delay_head_ = (delay_head_ + n) % size;
 }
 
 Synth::Voice& Synth::voice(VoiceId id) {
@@ -302,7 +326,7 @@ void Synth::render(uint32_t frames, float* out, const DriveInput& drive) {
   fb_.set_used(lease_, high_water_);
   fb_.process(std::span(pending_.data(), pending_count_), frames, out, drive);
   pending_count_ = 0;
-  forces_.render(now_, frames, fb_.channels(), out, &Synth::contact_gains, this);
+  render_forces(frames, out);
   now_ += frames;
   // Retire a round-robin share of the resident range (each slot is visited within ~8 renders).
   const uint32_t range = std::min(high_water_, budget_);

@@ -1,43 +1,39 @@
 #include "chladni/runtime/paper/spectral_noise.hpp"
 
-#include <fftw3.h>
+#include <kiss_fftr.h>
 
 #include <cmath>
 #include <complex>
-#include <mutex>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "chladni/core/error.hpp"
 
 namespace chladni::runtime {
 namespace {
 
-// FFTW's planner is not thread-safe; execution of a finished plan is.
-std::mutex& planner_mutex() {
-  static std::mutex m;
-  return m;
-}
-
+// A real FFT of size n (KISS FFT, BSD-3-clause: the runtime stays free of GPL code). Unnormalized
+// both ways: inverse(forward(x)) = n x.
 struct Plan {
-  fftwf_plan plan = nullptr;
-  float* real = nullptr;
-  fftwf_complex* spec = nullptr;
-  Plan(std::size_t n, bool inverse) {
-    std::lock_guard lock(planner_mutex());
-    real = fftwf_alloc_real(n);
-    spec = fftwf_alloc_complex(n / 2 + 1);
-    plan = inverse ? fftwf_plan_dft_c2r_1d(int(n), spec, real, FFTW_ESTIMATE)
-                   : fftwf_plan_dft_r2c_1d(int(n), real, spec, FFTW_ESTIMATE);
-    if (!plan) throw InternalError("FFTW could not plan a transform of size " + std::to_string(n));
+  kiss_fftr_cfg cfg = nullptr;
+  std::vector<float> real;
+  std::vector<kiss_fft_cpx> spec;
+  bool inverse;
+  Plan(std::size_t n, bool inv) : real(n), spec(n / 2 + 1), inverse(inv) {
+    cfg = kiss_fftr_alloc(int(n), inv ? 1 : 0, nullptr, nullptr);
+    if (!cfg)
+      throw InternalError("KISS FFT could not plan a transform of size " + std::to_string(n));
   }
-  ~Plan() {
-    std::lock_guard lock(planner_mutex());
-    fftwf_destroy_plan(plan);
-    fftwf_free(real);
-    fftwf_free(spec);
-  }
+  ~Plan() { kiss_fftr_free(cfg); }
   Plan(const Plan&) = delete;
   Plan& operator=(const Plan&) = delete;
+  void execute() {
+    if (inverse)
+      kiss_fftri(cfg, spec.data(), real.data());
+    else
+      kiss_fftr(cfg, real.data(), spec.data());
+  }
 };
 
 }  // namespace
@@ -66,17 +62,17 @@ void SpectralNoise::hop(std::span<const float> magnitudes, float* out) {
     phase_re_[k] = static_cast<float>(std::cos(phi));
     phase_im_[k] = static_cast<float>(std::sin(phi));
   }
-  // |Y_k| = M_k sqrt(N); y = c2r(Y) / N has variance mean(M^2) (unnormalized FFTW inverse).
+  // |Y_k| = M_k sqrt(N); y = c2r(Y) / N has variance mean(M^2) (unnormalized inverse).
   const float scale = 1.0f / std::sqrt(float(kSize));
   Plan& p = fft_->plan;
   for (int c = 0; c < channels_; ++c) {
     const float* mag = magnitudes.data() + c * kBins;
     for (std::size_t k = 0; k < kBins; ++k) {
-      p.spec[k][0] = mag[k] * phase_re_[k];
-      p.spec[k][1] = mag[k] * phase_im_[k];
+      p.spec[k].r = mag[k] * phase_re_[k];
+      p.spec[k].i = mag[k] * phase_im_[k];
     }
-    p.spec[0][1] = p.spec[kBins - 1][1] = 0;  // DC and Nyquist are real
-    fftwf_execute(p.plan);
+    p.spec[0].i = p.spec[kBins - 1].i = 0;  // DC and Nyquist are real
+    p.execute();
     float* tail = tail_.data() + c * kHop;
     for (std::size_t i = 0; i < kHop; ++i) {
       out[i * channels_ + c] = tail[i] + p.real[i] * window_[i] * scale;
@@ -102,9 +98,9 @@ std::vector<float> friction_spectrum(std::span<const float> samples) {
   std::size_t segments = 0;
   for (std::size_t start = 0; start + n <= samples.size(); start += n / 2, ++segments) {
     for (std::size_t i = 0; i < n; ++i) p.real[i] = static_cast<float>(samples[start + i] * w[i]);
-    fftwf_execute(p.plan);
+    p.execute();
     for (std::size_t k = 0; k < kFrictionBins; ++k)
-      power[k] += double(p.spec[k][0]) * p.spec[k][0] + double(p.spec[k][1]) * p.spec[k][1];
+      power[k] += double(p.spec[k].r) * p.spec[k].r + double(p.spec[k].i) * p.spec[k].i;
   }
   std::vector<float> out(kFrictionBins);
   for (std::size_t k = 0; k < kFrictionBins; ++k)

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include "chladni/core/error.hpp"
+#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
 
 namespace chladni::runtime {
@@ -23,7 +24,9 @@ std::unique_ptr<ShakerBank> make_bank(Filterbank& fb, const PlayerOptions& o) {
   bo.slots = o.shaker_slots;
   bo.max_voices = o.max_shakers;
   bo.seed = o.seed;
-  bo.excitation = fb.device() ? ExcitationBackend::Gpu : ExcitationBackend::Cpu;
+  // A pipelined device takes no input stage: the particles are then made on the CPU.
+  bo.excitation =
+      fb.device() && !fb.device()->pipelined() ? ExcitationBackend::Gpu : ExcitationBackend::Cpu;
   return std::make_unique<ShakerBank>(fb, bo);
 }
 

@@ -49,6 +49,9 @@ typedef struct chladni_config {
   int threads;             /* 0: all hardware threads (CPU backend) */
   uint32_t shaker_slots;   /* 4096: resonances of all shakers together (0: no shakers) */
   uint32_t max_shakers;    /* 64 */
+  int gpu_pipeline;        /* 1: the GPU backend's render returns without waiting for the
+                              device, its output block_size frames late (chladni_latency); 0:
+                              each render waits for its own block */
 } chladni_config;
 
 typedef struct chladni_runtime chladni_runtime;
@@ -133,6 +136,9 @@ chladni_status chladni_post_shake(chladni_runtime* runtime, uint32_t shaker, dou
 chladni_status chladni_render(chladni_runtime* runtime, float* out, uint32_t frames);
 /* Seconds rendered so far, as of the last chladni_render to return; any thread may ask. */
 double chladni_time(const chladni_runtime* runtime);
+/* Seconds by which the output lags the runtime's clock: an event at time t is heard at output
+ * time t + latency. 0 on the CPU backend; block_size / sample_rate on the pipelined GPU one. */
+double chladni_latency(const chladni_runtime* runtime);
 
 #ifdef __cplusplus
 }

@@ -108,6 +108,8 @@ class Filterbank {
   /// Reads back one slot's state (for tests and diagnostics; may be slow).
   virtual std::complex<float> state(uint32_t slot) = 0;
   virtual FilterbankTiming last_timing() const { return {}; }
+  /// Samples by which process()'s output lags its input (a pipelined device: its block size).
+  virtual uint32_t latency() const { return 0; }
   /// The Vulkan filterbank this is (null for the CPU one): stages that feed its inputs on the
   /// device (a GPU particle excitation) need it.
   virtual GpuFilterbank* device() { return nullptr; }

@@ -28,6 +28,10 @@ struct GpuFilterbankOptions {
   /// Input streams for driven slots (stream rows of max_frames floats on the device).
   uint32_t max_streams = 0;
   uint32_t gain_ramp = 256;  ///< samples over which gain changes ramp (0: at once)
+  /// process() submits its block and returns without waiting for the device, handing back
+  /// samples max_frames() late: the device works while the caller goes on (an audio callback
+  /// returns at once). Takes no GpuInputStage.
+  bool pipelined = false;
 };
 
 /// Records device work that fills GpuFilterbank::input_buffer() for one process() call (a
@@ -56,7 +60,8 @@ class GpuFilterbank final : public Filterbank {
   gpu::Buffer& input_buffer() { return *inputs_; }
   /// A stage that writes the inputs on the device; process() calls with input.samples == nullptr
   /// and input.streams > 0 then record it instead of uploading (nullptr: none).
-  void set_input_stage(GpuInputStage* stage) { stage_ = stage; }
+  void set_input_stage(GpuInputStage* stage);
+  bool pipelined() const { return pipelined_; }
 
   void set_mode(uint32_t slot, std::complex<float> pole, const float gains[2]) override;
   void set_pole(uint32_t slot, std::complex<float> pole) override;
@@ -69,6 +74,7 @@ class GpuFilterbank final : public Filterbank {
                const DriveInput& input) override;
   std::complex<float> state(uint32_t slot) override;
   FilterbankTiming last_timing() const override { return timing_; }
+  uint32_t latency() const override;
   GpuFilterbank* device() override { return this; }
 
  private:
@@ -78,14 +84,17 @@ class GpuFilterbank final : public Filterbank {
   void flush_updates(bool at_once = false);
   void ramps_at_once(uint32_t from_slot);  // queued ramps of slots >= from_slot become immediate
   void clear_updates();                    // after a submit has applied them
+  void collect();                          // pipelined: waits for the block in flight
 
   std::shared_ptr<gpu::Context> ctx_;
   uint32_t capacity_, channels_, max_frames_, max_excitations_, high_water_;
   uint32_t local_, mpi_, rows_per_group_, max_updates_, max_streams_;
-  std::unique_ptr<gpu::Buffer> modes_, gains_, excitations_, scratch_, result_, updates_;
+  std::unique_ptr<gpu::Buffer> modes_, gains_, excitations_, scratch_, result_;
+  std::unique_ptr<gpu::Buffer> updates_[2];  // one filled on the host while the device reads one
   std::unique_ptr<gpu::Buffer> drives_, inputs_, targets_;
   std::unique_ptr<gpu::Pipeline> filterbank_[2][2];  // [driven][ramp]
-  std::unique_ptr<gpu::Pipeline> reduce_, apply_;
+  std::unique_ptr<gpu::Pipeline> reduce_, apply_[2];
+  uint32_t cur_ = 0;  // the update list being filled
   uint32_t gain_ramp_;
   // Samples processed, and the sample by which every ramp begun so far has ended: the ramping
   // kernel runs until then.
@@ -97,6 +106,11 @@ class GpuFilterbank final : public Filterbank {
   std::vector<uint32_t> pending_index_;  // per slot: index into the update list, or ~0
   uint32_t update_count_ = 0;
   FilterbankTiming timing_;
+  // Pipelined mode: the block in flight, and the samples ready to hand back (a ring).
+  bool pipelined_ = false, in_flight_ = false;
+  uint32_t flight_frames_ = 0, flight_groups_ = 0;
+  std::vector<float> fifo_;
+  std::size_t fifo_head_ = 0, fifo_size_ = 0;
 };
 
 }  // namespace chladni::runtime

@@ -96,6 +96,7 @@ class Synth {
   void drop_pending(uint32_t slot);
   double envelope(uint32_t slot, int64_t t) const;  ///< bound on |z| at sample t
   Voice& voice(VoiceId id);
+  void render_forces(uint32_t frames, float* out);
 
   Filterbank& fb_;
   SynthOptions opt_;
@@ -116,6 +117,10 @@ class Synth {
   std::vector<uint8_t> kicked_;  // per mode of the last kick(): whether it reached the filterbank
   std::vector<std::complex<float>> strike_amp_;
   ContactForces forces_;
+  // The contact forces are added on the host: behind a filterbank whose output lags (a pipelined
+  // device), they lag as much, through this ring of (latency + max_frames) frames.
+  std::vector<float> force_block_, force_delay_;
+  std::size_t delay_head_ = 0;
   std::size_t pending_count_ = 0;
   uint32_t used_ = 0, high_water_ = 0, scan_cursor_ = 0;
   uint64_t now_ = 0;
