@@ -319,8 +319,35 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
     throw std::invalid_argument("process: more excitations than max_excitations()");
   }
   if (frames == 0) return;
-  // The shader walks each invocation's excitations in offset order: map slot -> (invocation, j)
-  // as filterbank.comp lays modes out, and sort by (invocation, offset).
+  const uint32_t ne = stage_excitations(excitations, frames);
+  const uint32_t groups = div_up(high_water_, local_ * mpi_);
+  const uint32_t count = frames * channels_;
+  record_block(frames, ne, groups, driven, driven && !input.samples);
+  processed_ += frames;
+  if (!pipelined_) {
+    seq_->run();
+    timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
+    timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
+    std::memcpy(out, result_->data(), sizeof(float) * count);
+    clear_updates();
+    return;
+  }
+  // Pipelined: the device runs this block while the caller goes on; the caller gets the oldest
+  // samples, which the FIFO always holds (it starts with max_frames of silence).
+  seq_->submit();
+  clear_updates();
+  in_flight_ = true;
+  flight_frames_ = frames;
+  flight_groups_ = groups;
+  for (uint32_t i = 0; i < count; ++i) out[i] = fifo_[(fifo_head_ + i) % fifo_.size()];
+  fifo_head_ = (fifo_head_ + count) % fifo_.size();
+  fifo_size_ -= count;
+}
+
+// The shader walks each invocation's excitations in offset order: map slot -> (invocation, j)
+// as filterbank.comp lays modes out, and sort by (invocation, offset).
+uint32_t GpuFilterbank::stage_excitations(std::span<const Excitation> excitations,
+                                          uint32_t frames) {
   auto* exc = static_cast<Excitation*>(excitations_->data());
   const uint32_t ne = static_cast<uint32_t>(excitations.size());
   const uint32_t per_group = local_ * mpi_;
@@ -336,9 +363,14 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   std::sort(exc, exc + ne, [](const Excitation& a, const Excitation& b) {
     return a.slot != b.slot ? a.slot < b.slot : (a.offset & 0xffffu) < (b.offset & 0xffffu);
   });
+  return ne;
+}
 
+// Records one block: queued updates, the device input stage, the filterbank kernel and the
+// tree reduction into result_, between timestamps 0, 1 (kernel done) and 2.
+void GpuFilterbank::record_block(uint32_t frames, uint32_t ne, uint32_t groups, bool driven,
+                                 bool from_stage) {
   const uint32_t group_modes = local_ * mpi_;
-  const uint32_t groups = div_up(high_water_, group_modes);
   const uint32_t count = frames * channels_;
   // Slots past the processed range take their gains at once: no dispatch would commit a ramp.
   ramps_at_once(groups * group_modes);
@@ -346,7 +378,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   seq_->begin();
   seq_->timestamp(0);
   record_updates();
-  if (driven && !input.samples) {
+  if (from_stage) {
     stage_->record(*seq_, frames);
     seq_->barrier();
   }
@@ -374,25 +406,6 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
     seq_->barrier();
   }
   seq_->timestamp(2);
-  processed_ += frames;
-  if (!pipelined_) {
-    seq_->run();
-    timing_.gpu_ms = seq_->elapsed_ns(0, 2) * 1e-6;
-    timing_.kernel_ms = groups ? seq_->elapsed_ns(0, 1) * 1e-6 : 0.0;
-    std::memcpy(out, result_->data(), sizeof(float) * count);
-    clear_updates();
-    return;
-  }
-  // Pipelined: the device runs this block while the caller goes on; the caller gets the oldest
-  // samples, which the FIFO always holds (it starts with max_frames of silence).
-  seq_->submit();
-  clear_updates();
-  in_flight_ = true;
-  flight_frames_ = frames;
-  flight_groups_ = groups;
-  for (uint32_t i = 0; i < count; ++i) out[i] = fifo_[(fifo_head_ + i) % fifo_.size()];
-  fifo_head_ = (fifo_head_ + count) % fifo_.size();
-  fifo_size_ -= count;
 }
 
 }  // namespace chladni::runtime

@@ -85,6 +85,9 @@ class GpuFilterbank final : public Filterbank {
   void ramps_at_once(uint32_t from_slot);  // queued ramps of slots >= from_slot become immediate
   void clear_updates();                    // after a submit has applied them
   void collect();                          // pipelined: waits for the block in flight
+  uint32_t stage_excitations(std::span<const Excitation> excitations, uint32_t frames);
+  void record_block(uint32_t frames, uint32_t excitations, uint32_t groups, bool driven,
+                    bool from_stage);
 
   std::shared_ptr<gpu::Context> ctx_;
   uint32_t capacity_, channels_, max_frames_, max_excitations_, high_water_;
