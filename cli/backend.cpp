@@ -30,6 +30,7 @@ std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& r) {
       o.max_frames = r.max_frames;
       o.max_streams = r.max_streams;
       o.gain_ramp = r.gain_ramp;
+      o.pipelined = r.pipelined;
       return std::make_unique<runtime::GpuFilterbank>(ctx, o);
     } catch (const gpu::NoDeviceError& e) {
       std::fprintf(stderr, "warning: %s; using the CPU filterbank instead\n", e.what());

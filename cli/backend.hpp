@@ -23,6 +23,7 @@ struct BackendRequest {
   uint32_t max_frames = 4096;
   uint32_t max_streams = 0;  ///< input streams of driven slots (PhISEM voices)
   uint32_t gain_ramp = 256;  ///< samples over which gain changes ramp (0: at once)
+  bool pipelined = false;    ///< gpu only: process() returns before the device is done
 };
 
 std::unique_ptr<runtime::Filterbank> make_filterbank(const BackendRequest& request);

@@ -87,13 +87,16 @@ void play(const PlayArgs& a, const Scene& scene) {
   if (audio.getDeviceCount() == 0)
     throw InputError("no audio device on " + RtAudio::getApiDisplayName(audio.getCurrentApi()) +
                      " (is a sound server running? --api jack|alsa|pulse)");
-  const SceneSetup setup = setup_scene(scene, a);
+  PlayArgs live = a;
+  live.live = true;
+  const SceneSetup setup = setup_scene(scene, live);
   runtime::SceneTimeline timeline(scene, setup.objects, *setup.fb, setup.options);
   Playback p;
   p.timeline = &timeline;
   p.channels = scene.channels;
   p.stop_at =
-      a.duration > 0 ? runtime::first_sample(a.duration, scene.sample_rate) : timeline.end();
+      (a.duration > 0 ? runtime::first_sample(a.duration, scene.sample_rate) : timeline.end()) +
+      setup.fb->latency();  // a pipelined GPU hands the last samples back that much later
   RtAudio::StreamParameters out;
   out.deviceId = a.device >= 0 ? static_cast<unsigned>(a.device) : audio.getDefaultOutputDevice();
   out.nChannels = static_cast<unsigned>(scene.channels);
@@ -113,12 +116,14 @@ void play(const PlayArgs& a, const Scene& scene) {
   if (audio.isStreamOpen()) audio.closeStream();
   if (p.failed) throw InternalError("play: the synthesis failed in the audio callback");
   if (!a.quiet) {
+    const uint32_t fb_latency = setup.fb->latency();
     std::printf(
         "%s, device %u (%s): %u frames per buffer, %d Hz, stream latency %ld frames "
-        "(%.1f ms)\n",
+        "(%.1f ms), filterbank latency %u frames (%.1f ms)\n",
         RtAudio::getApiDisplayName(audio.getCurrentApi()).c_str(), out.deviceId,
         audio.getDeviceInfo(out.deviceId).name.c_str(), frames, scene.sample_rate, latency,
-        1e3 * double(latency) / scene.sample_rate);
+        1e3 * double(latency) / scene.sample_rate, fb_latency,
+        1e3 * double(fb_latency) / scene.sample_rate);
     std::printf("played %.3f s in %.3f s: %llu callbacks, worst %.3f ms of %.3f ms\n",
                 double(timeline.time()) / scene.sample_rate, wall,
                 static_cast<unsigned long long>(p.callbacks.load()), p.worst_ms.load(),

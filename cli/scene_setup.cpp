@@ -36,6 +36,7 @@ SceneSetup setup_scene(const Scene& scene, const SceneArgs& a) {
   req.max_streams = static_cast<uint32_t>(shakers.first_event.size());
   req.max_frames = std::max<uint32_t>(a.block, 256);
   req.gain_ramp = a.gain_ramp;
+  req.pipelined = a.live;
   s.fb = make_filterbank(req);
   s.options.block = a.block;
   s.options.synth.retire_db = a.retire_db;

@@ -22,6 +22,7 @@ struct SceneArgs {
   uint32_t block = 256, max_modes = 0, gain_ramp = 256;
   double retire_db = -100;
   bool quiet = false;
+  bool live = false;  ///< a live stream: the GPU filterbank pipelines its blocks
 };
 
 struct SceneSetup {
