@@ -11,6 +11,7 @@
 #include "chladni/core/soundbank.hpp"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
 #include "chladni/runtime/scene/render.hpp"
+#include "chladni/runtime/scene/scene_objects.hpp"
 #include "test_support.hpp"
 
 using namespace chladni;
@@ -205,6 +206,64 @@ TEST(CApi, ShakesAsTheOfflineRendererDoes) {
   ASSERT_EQ(chladni_render(r.rt, tail.data(), 512), CHLADNI_OK);  // gains ramp to zero
   ASSERT_EQ(chladni_render(r.rt, tail.data(), 1024), CHLADNI_OK);
   EXPECT_EQ(test::max_abs(tail), 0.0);
+}
+
+TEST(CApi, PlaysAnAnalyticBarAsTheSceneFormatDoes) {
+  // The scene format's "bar" object and chladni_bank_bar, both at their defaults (a steel bar),
+  // struck at two points along it.
+  Scene scene;
+  scene.channels = 2;
+  scene.duration = 0.4;
+  SceneObject bar;
+  bar.name = "bar";
+  bar.source = SceneObject::Source::Bar;
+  bar.position = {0, 1.5, 0};
+  scene.objects = {bar};
+  const double xs[2] = {0.02, 0.11}, times[2] = {0.01, 0.2};
+  for (int k = 0; k < 2; ++k) {
+    ImpactEvent e;
+    e.time = times[k];
+    e.impulse = 0.002;
+    e.point = Vec3{xs[k], 0.015, 0.01};
+    scene.events.push_back(e);
+  }
+  auto playable = runtime::resolve_objects(scene);
+  std::vector<runtime::ObjectModes> objects{playable[0].modes};
+  runtime::CpuFilterbank fb({.capacity = 65536, .channels = 2, .threads = 1});
+  const AudioBuffer ref = runtime::render_scene(scene, objects, fb, {});
+
+  Runtime r;
+  chladni_bar spec;
+  chladni_bar_default(&spec);
+  chladni_bank* b = nullptr;
+  ASSERT_EQ(chladni_bank_bar(r.rt, &spec, &b), CHLADNI_OK) << chladni_last_error();
+  EXPECT_EQ(chladni_bank_mode_count(b), playable[0].modes.modes.size());
+  EXPECT_NEAR(chladni_bank_mass(b), 7850 * 0.3 * 0.03 * 0.01, 1e-9);
+  const double identity[4] = {1, 0, 0, 0};
+  uint32_t id = 0;
+  ASSERT_EQ(chladni_spawn(r.rt, b, bar.position.data(), identity, 1.0, &id), CHLADNI_OK);
+  for (int k = 0; k < 2; ++k) {
+    chladni_impact im{};
+    im.time = times[k];
+    im.impulse = 0.002;
+    im.direction[2] = -1;
+    im.vertex = -1;
+    im.point[0] = xs[k], im.point[1] = 0.015, im.point[2] = 0.01;
+    ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  }
+  std::vector<float> out(ref.samples.size());
+  ASSERT_EQ(chladni_render(r.rt, out.data(), uint32_t(ref.frames())), CHLADNI_OK);
+  const double peak = test::max_abs(ref.samples);
+  ASSERT_GT(peak, 1e-4);
+  EXPECT_LT(test::max_diff(ref.samples, out), 1e-6 * peak);
+  // Bad bars name the field.
+  spec.thickness = INFINITY;
+  EXPECT_EQ(chladni_bank_bar(r.rt, &spec, &b), CHLADNI_INPUT_ERROR);
+  EXPECT_NE(std::string(chladni_last_error()).find("finite and > 0"), std::string::npos);
+  chladni_bar_default(&spec);
+  spec.poisson_ratio = 0.7;
+  EXPECT_EQ(chladni_bank_bar(r.rt, &spec, &b), CHLADNI_INPUT_ERROR);
+  EXPECT_NE(std::string(chladni_last_error()).find("poisson_ratio"), std::string::npos);
 }
 
 TEST(CApi, RefusesBadInputAndAFullQueue) {

@@ -122,6 +122,55 @@ chladni_status chladni_bank_from_modes(chladni_runtime* rt, const double* freque
   });
 }
 
+void chladni_bar_default(chladni_bar* bar) {
+  if (!bar) return;
+  const BarSpec d;
+  *bar = chladni_bar{d.length,
+                     d.width,
+                     d.thickness,
+                     d.youngs_modulus,
+                     d.poisson_ratio,
+                     d.density,
+                     {d.damping.alpha[0], d.damping.alpha[1]},
+                     d.max_frequency};
+}
+
+chladni_status chladni_bank_bar(chladni_runtime* rt, const chladni_bar* bar, chladni_bank** out) {
+  return capi::guarded("chladni_bank_bar", [&] {
+    if (!rt || !bar || !out) throw InputError("runtime, bar and out must not be null");
+    for (double v : {bar->length, bar->width, bar->thickness, bar->youngs_modulus, bar->density,
+                     bar->max_frequency})
+      if (!(v > 0 && std::isfinite(v)))
+        throw InputError(
+            "bar: dimensions, Young's modulus, density and max_frequency must be "
+            "finite and > 0");
+    if (!(bar->poisson_ratio > -1 && bar->poisson_ratio < 0.5))
+      throw InputError("bar: poisson_ratio must be in (-1, 0.5)");
+    if (!(bar->rayleigh[0] >= 0 && bar->rayleigh[1] >= 0 && std::isfinite(bar->rayleigh[0]) &&
+          std::isfinite(bar->rayleigh[1])))
+      throw InputError("bar: the Rayleigh coefficients must be finite and >= 0");
+    SceneObject obj;
+    obj.name = "bar";
+    obj.json_path = "bar";
+    obj.source = SceneObject::Source::Bar;
+    obj.bar = {bar->length,
+               bar->width,
+               bar->thickness,
+               bar->youngs_modulus,
+               bar->poisson_ratio,
+               bar->density,
+               DampingModel{DampingModel::Kind::Rayleigh, {bar->rayleigh[0], bar->rayleigh[1]}},
+               bar->max_frequency};
+    PlayableObject p = resolve_object(obj, rt->config.sample_rate);
+    auto b = std::make_unique<chladni_bank>();
+    b->mass = bar->density * bar->length * bar->width * bar->thickness;
+    b->model = std::move(p.model);
+    b->modes = object_modes(*b->model);
+    *out = keep(rt, std::move(b));
+    return CHLADNI_OK;
+  });
+}
+
 size_t chladni_bank_mode_count(const chladni_bank* bank) {
   return bank ? bank->modes.modes.size() : 0;
 }

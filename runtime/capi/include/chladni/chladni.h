@@ -77,6 +77,21 @@ chladni_status chladni_bank_load_memory(chladni_runtime* runtime, const void* by
 chladni_status chladni_bank_from_modes(chladni_runtime* runtime, const double* frequency_hz,
                                        const double* decay, const double* amplitude, size_t count,
                                        chladni_bank** out);
+/* A free-free rectangular bar described analytically (Euler-Bernoulli bending across its
+ * thickness and width, axial modes), as a scene's "bar" object: no precompute needed. The bar
+ * lies along x from 0 to length, its top face at z = thickness. */
+typedef struct chladni_bar {
+  double length, width, thickness; /* m (x, y, z) */
+  double youngs_modulus;           /* Pa */
+  double poisson_ratio;
+  double density;       /* kg/m^3 */
+  double rayleigh[2];   /* damping c = rayleigh[0] + rayleigh[1] omega^2 (1/s, s) */
+  double max_frequency; /* Hz: modes above are dropped (and those above Nyquist) */
+} chladni_bar;
+/* Fills `bar` with the scene format's defaults: a 0.3 x 0.03 x 0.01 m steel bar. */
+void chladni_bar_default(chladni_bar* bar);
+chladni_status chladni_bank_bar(chladni_runtime* runtime, const chladni_bar* bar,
+                                chladni_bank** out);
 size_t chladni_bank_mode_count(const chladni_bank* bank);
 size_t chladni_bank_point_count(const chladni_bank* bank); /* surface points (0: inline) */
 /* The axis-aligned box of a bank's surface points in its own frame (m), for a collision shape.
