@@ -1,4 +1,4 @@
-// PhISEM speed (docs/PERFORMANCE.md, "Particle sounds"): the two loads, kept busy by
+// PhISEM speed (docs/PERFORMANCE.md, "Particle sounds"): two loads, kept busy by
 // shaking every voice 8 times a second, on the CPU (excitation and filterbank) and on the GPU
 // (excitation kernel + filterbank in one submit per block):
 //   shakers   1,000 voices x 4 resonances (sleigh-bell tuning, retuned after collisions)

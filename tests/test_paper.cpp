@@ -1,4 +1,4 @@
-// Paper sound, issue 5: the animation format, the sheet's geometry and the per-frame analysis
+// Paper sound: the animation format, the sheet's geometry and the per-frame analysis
 // (Schreck et al. 2016, §4) against the generated scenarios, whose event frames are known.
 #include <gtest/gtest.h>
 #include <zlib.h>

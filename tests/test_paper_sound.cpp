@@ -1,4 +1,4 @@
-// Paper sound, issue 5, synthesis half: the sheet model, inverse-FFT noise and spectra, the
+// Paper sound, synthesis half: the sheet model, inverse-FFT noise and spectra, the
 // sound databases on disk, the dipole and image-source spatialization (Schreck et al. 2016,
 // Eq. 3-6), database and modal synthesis (CPU and GPU) and onsets at the events' frames.
 #include <gtest/gtest.h>

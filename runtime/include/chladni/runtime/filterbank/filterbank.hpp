@@ -22,7 +22,7 @@ struct Excitation {
   float im;
 };
 
-/// Dense per-sample input for driven slots (stochastic excitation, issue 6): `streams` rows of
+/// Dense per-sample input for driven slots (stochastic excitation): `streams` rows of
 /// `frames` samples each, row-major. A slot driven by stream k with gain a advances as
 /// z[n] = p z[n-1] + a x_k[n] (+ any impulse at n).
 struct DriveInput {

@@ -9,7 +9,7 @@
 
 namespace chladni::runtime {
 
-/// Office paper, 80 g/m^2 and 0.1 mm thick (the issue); E, nu and damping: docs/paper.md.
+/// Office paper, 80 g/m^2 and 0.1 mm thick; E, nu and damping: docs/paper.md.
 struct PaperMaterial {
   double thickness = 1e-4;         ///< m
   double surface_density = 0.080;  ///< kg/m^2
