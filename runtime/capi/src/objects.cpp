@@ -234,7 +234,9 @@ chladni_status chladni_shaker_add(chladni_runtime* rt, const chladni_shaker_desc
     if (!rt || !desc || !shaker || !desc->instrument)
       throw InputError("runtime, desc, desc->instrument and shaker must not be null");
     check_target(rt, desc->object, 0.0);
-    if (rt->player->shaker_count() >= rt->config.max_shakers || rt->config.shaker_slots == 0)
+    if (rt->config.shaker_slots == 0)
+      throw InputError("the runtime was created with shaker_slots = 0: no room for shakers");
+    if (rt->player->shaker_count() >= rt->config.max_shakers)
       throw InputError("max_shakers (" + std::to_string(rt->config.max_shakers) + ") reached");
     if (!(desc->particles >= 0 && desc->particles <= 1e6))
       throw InputError("particles must be in [0, 1e6]");

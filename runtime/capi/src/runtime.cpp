@@ -25,7 +25,6 @@ std::unique_ptr<Filterbank> make_filterbank(const chladni_config& c) {
       if (c.backend == CHLADNI_BACKEND_GPU || t == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU ||
           t == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU) {
         GpuFilterbankOptions o;
-        o.capacity = c.mode_budget;
         o.channels = c.channels;
         o.max_frames = c.block_size;
         o.gain_ramp = c.gain_ramp;
@@ -121,7 +120,7 @@ uint32_t chladni_runtime::until_next_pose(uint32_t frames) const {
   return frames;
 }
 
-// Applies the poses due by sample t, then strikes the impacts due before t + frames.
+// Applies the poses due by sample t, then the shakes and impacts due before t + frames.
 void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
   auto keep_if = [&](auto&& applied) {  // compacts `pending`; shrinking keeps the capacity
     std::size_t kept = 0;

@@ -115,8 +115,7 @@ bool ScenePlayer::shake(int k, float energy, uint32_t offset) {
 void ScenePlayer::apply_shaker_gains(int k) {
   const Shaker& sh = shakers_[k];
   const Object& o = objects_[sh.object];
-  if (o.voice < 0) {  // removed: silent from now on
-    std::fill(flat_.begin(), flat_.end(), 0.0f);
+  if (o.voice < 0) {  // removed: a zero pan silences every resonance
     bank_->set_gains(k, std::span(flat_).first(sh.resonances), 0, 0);
   } else if (sh.resonate) {
     bank_->set_gains(k, o.gains, o.pan[0], o.pan[1]);
@@ -203,7 +202,8 @@ bool ScenePlayer::update_gains() {
       transfer_gains(table_, frame_, table_gains_, pool_.get());
   }
   for (Object& o : objects_) apply_gains(o);
-  for (std::size_t s = 0; s < shakers_.size(); ++s) apply_shaker_gains(static_cast<int>(s));
+  for (std::size_t s = 0; s < shakers_.size(); ++s)  // remove() silenced the others once
+    if (objects_[shakers_[s].object].voice >= 0) apply_shaker_gains(static_cast<int>(s));
   dirty_ = false;
   ++gain_updates_;
   gain_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -97,7 +97,6 @@ bool SceneTimeline::rung_out() const {
 
 uint32_t SceneTimeline::render_step(uint32_t frames, float* out) {
   frames = apply_moves(std::min(frames, max_frames_));
-  player_.update_gains();
   frames = apply_impacts(frames);
   for (; next_shake_ < scene_.shakes.size(); ++next_shake_) {
     const ShakeEvent& ev = scene_.shakes[next_shake_];
