@@ -13,7 +13,6 @@
 #include "chladni/core/output_file.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/runtime/filterbank/filterbank.hpp"
-#include "chladni/runtime/modal/transfer_gains.hpp"
 #include "chladni/runtime/phisem/shaker_bank.hpp"
 #include "chladni/runtime/scene/render.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
@@ -40,24 +39,6 @@ Vec3 parse_vec3(const std::string& s, const char* what) {
   if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 || !is_finite(v))
     throw InputError(std::string(what) + " must be X,Y,Z in metres, got '" + s + "'");
   return v;
-}
-
-// Per-mode pressure gains at the listener (object frame), by the runtime's rule.
-void listener_gains(const ModalModel& model, runtime::ObjectModes& object, const Vec3& listener) {
-  std::vector<float> xfer;
-  if (model.transfer) {
-    runtime::TransferTable table;
-    table.map_options.reset();  // one update: the series costs less than building maps
-    table.add(*model.transfer);
-    runtime::ListenerFrame frame;
-    const Vec3 at[1] = {listener};
-    frame.update(table, at);
-    xfer.resize(table.mode_count());
-    runtime::transfer_gains(table, frame, xfer);
-  }
-  std::vector<float> gains(object.modes.size());
-  runtime::listener_mode_gains(object, xfer, 1.0, 1.0 / std::max(norm(listener), 0.1), gains);
-  for (std::size_t i = 0; i < gains.size(); ++i) object.modes[i].gain = gains[i];
 }
 
 void list_instruments() {
@@ -93,7 +74,7 @@ void run_shake(const ShakeArgs& a) {
                        " modes of " + a.bank +
                        " is more than the 64 million contact gains a shake may hold");
     object = runtime::object_modes(*model);
-    listener_gains(*model, object, parse_vec3(a.listener, "--listener"));
+    runtime::gains_at_listener(*model, object, parse_vec3(a.listener, "--listener"));
   }
   for (uint32_t v = 0; v < a.voices; ++v) {
     runtime::ShakerVoice sv = a.bank.empty()

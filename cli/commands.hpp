@@ -62,5 +62,6 @@ void add_radiate(CLI::App& app);
 void add_paper(CLI::App& app);
 void add_shake(CLI::App& app);
 void add_batch(CLI::App& app);
+void add_estimate(CLI::App& app);
 
 }  // namespace chladni::cli

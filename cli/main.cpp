@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("chladni ") + chladni::kVersion);
   chladni::cli::add_precompute(app);
   chladni::cli::add_batch(app);
+  chladni::cli::add_estimate(app);
   chladni::cli::add_info(app);
   chladni::cli::add_materials(app);
   chladni::cli::add_radiate(app);

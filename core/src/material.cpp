@@ -1,9 +1,15 @@
 #include "chladni/core/material.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdlib>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 
 #include "chladni/core/error.hpp"
+#include "chladni/core/input_file.hpp"
+#include "chladni/core/output_file.hpp"
 #include "materials_data.hpp"
 
 namespace chladni {
@@ -76,11 +82,80 @@ const std::vector<Material>& material_presets() {
   return presets;
 }
 
+std::string user_materials_path() {
+  if (const char* p = std::getenv("CHLADNI_MATERIALS"); p && *p) return p;
+  if (const char* x = std::getenv("XDG_CONFIG_HOME"); x && *x)
+    return std::string(x) + "/chladni/materials.json";
+  const char* home = std::getenv("HOME");
+  return std::string(home && *home ? home : ".") + "/.config/chladni/materials.json";
+}
+
+namespace {
+
+// The user's file as JSON (an empty list when it does not exist yet).
+nlohmann::json user_materials_json(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec))
+    return {
+        {"format", "chladni-materials"}, {"version", 1}, {"materials", nlohmann::json::array()}};
+  const auto bytes = read_input_file(path, "materials file", kMaxTextInputBytes);
+  const std::string text(bytes.begin(), bytes.end());
+  parse_materials(text, path);  // the whole file must be valid
+  return nlohmann::json::parse(text);
+}
+
+}  // namespace
+
+void check_material_name(const std::string& name) {
+  const bool ok =
+      !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_' || c == '.';
+      });
+  if (!ok)
+    throw InputError("material name '" + name + "': use 1 to 64 letters, digits, '-', '_' or '.'");
+  for (const Material& m : material_presets())
+    if (m.name == name)
+      throw InputError("material name '" + name + "' is a shipped preset; choose another");
+}
+
+void save_user_material(const Material& m) {
+  check_material_name(m.name);
+  m.validate();
+  const std::string path = user_materials_path();
+  nlohmann::json j = user_materials_json(path);
+  nlohmann::json entry = {{"name", m.name},
+                          {"E", m.youngs_modulus},
+                          {"nu", m.poisson_ratio},
+                          {"rho", m.density},
+                          {"damping", m.damping.to_string()},
+                          {"source", m.source}};
+  auto& list = j["materials"];
+  bool replaced = false;
+  for (auto& e : list)
+    if (e.value("name", "") == m.name) e = entry, replaced = true;
+  if (!replaced) list.push_back(entry);
+  std::error_code ec;
+  const auto dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty()) std::filesystem::create_directories(dir, ec);
+  if (ec) throw InputError("cannot create " + dir.string() + ": " + ec.message());
+  write_file_atomic(path, j.dump(2) + "\n", "materials file");
+}
+
 Material find_material(std::string_view name) {
   for (const Material& m : material_presets())
     if (m.name == name) return m;
+  const std::string user = user_materials_path();
+  std::error_code ec;
+  std::vector<Material> own;
+  if (std::filesystem::exists(user, ec)) {
+    const auto bytes = read_input_file(user, "materials file", kMaxTextInputBytes);
+    own = parse_materials(std::string(bytes.begin(), bytes.end()), user);
+    for (const Material& m : own)
+      if (m.name == name) return m;
+  }
   std::string known;
   for (const Material& m : material_presets()) known += (known.empty() ? "" : ", ") + m.name;
+  for (const Material& m : own) known += ", " + m.name + " (" + user + ")";
   throw InputError("unknown material '" + std::string(name) + "'; known: " + known);
 }
 

@@ -5,6 +5,7 @@
 
 #include "chladni/core/analytic_bar.hpp"
 #include "chladni/core/error.hpp"
+#include "chladni/runtime/modal/transfer_gains.hpp"
 
 namespace chladni::runtime {
 namespace {
@@ -102,6 +103,23 @@ void listener_mode_gains(const ObjectModes& object, std::span<const float> trans
     out[i] = xfer && object.transfer->usable(i) ? static_cast<float>(scale * transfer[i])
                                                 : static_cast<float>(object.modes[i].gain * spread);
   }
+}
+
+void gains_at_listener(const ModalModel& model, ObjectModes& object, const Vec3& listener) {
+  std::vector<float> xfer;
+  if (model.transfer) {
+    TransferTable table;
+    table.map_options.reset();  // one update: the series costs less than building maps
+    table.add(*model.transfer);
+    ListenerFrame frame;
+    const Vec3 at[1] = {listener};
+    frame.update(table, at);
+    xfer.resize(table.mode_count());
+    transfer_gains(table, frame, xfer);
+  }
+  std::vector<float> gains(object.modes.size());
+  listener_mode_gains(object, xfer, 1.0, 1.0 / std::max(norm(listener), 0.1), gains);
+  for (std::size_t i = 0; i < gains.size(); ++i) object.modes[i].gain = gains[i];
 }
 
 }  // namespace chladni::runtime

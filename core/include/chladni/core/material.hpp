@@ -32,6 +32,18 @@ const std::vector<Material>& material_presets();
 /// listing the known names when there is no such preset.
 Material find_material(std::string_view name);
 
+/// The user's own presets (saved by `chladni estimate --save-material`): $CHLADNI_MATERIALS, else
+/// $XDG_CONFIG_HOME/chladni/materials.json, else ~/.config/chladni/materials.json. The file has
+/// the format of data/materials.json; find_material() looks there after the shipped presets.
+std::string user_materials_path();
+
+/// Throws InputError unless `name` can name a user preset: 1 to 64 letters, digits, '-', '_' or
+/// '.', and not the name of a shipped preset.
+void check_material_name(const std::string& name);
+
+/// Adds `m` to the user's presets (replacing one of the same name), written atomically.
+void save_user_material(const Material& m);
+
 /// Parses a materials file in the format of data/materials.json; `origin` names it in errors.
 std::vector<Material> parse_materials(std::string_view json_text, const std::string& origin);
 

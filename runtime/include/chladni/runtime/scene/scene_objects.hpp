@@ -36,6 +36,11 @@ std::vector<PlayableObject> resolve_objects(const Scene& scene);
 void listener_mode_gains(const ObjectModes& object, std::span<const float> transfer, double scale,
                          double spread, std::span<float> out);
 
+/// Sets each mode's `gain` in `object` (built from `model`) to its pressure at a listener at
+/// `listener` (m, object frame) per unit modal acceleration, once: by the model's transfer when
+/// it has one, else by the compact-source gain with 1/r spreading (r at least 0.1 m).
+void gains_at_listener(const ModalModel& model, ObjectModes& object, const Vec3& listener);
+
 /// The first sample at or after `time` seconds: the one time-to-sample rule of the runtime.
 inline uint64_t first_sample(double time, double sample_rate) {
   return static_cast<uint64_t>(std::ceil(time * sample_rate));
