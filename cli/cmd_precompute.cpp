@@ -334,12 +334,19 @@ void add_precompute(CLI::App& app, bool run) {
 }
 
 void add_materials(CLI::App& app) {
-  CLI::App* cmd = app.add_subcommand("materials", "List the material presets and their sources");
+  CLI::App* cmd = app.add_subcommand(
+      "materials",
+      "List the material presets (and your own, from chladni estimate) with their sources");
   cmd->callback([] {
-    for (const Material& m : material_presets())
+    auto print = [](const Material& m) {
       std::printf("%-26s E %8.3g Pa  nu %.2f  rho %6.0f  %-30s %s\n", m.name.c_str(),
                   m.youngs_modulus, m.poisson_ratio, m.density, m.damping.to_string().c_str(),
                   m.source.c_str());
+    };
+    for (const Material& m : material_presets()) print(m);
+    const auto own = user_material_presets();
+    if (!own.empty()) std::printf("\nyours (%s):\n", user_materials_path().c_str());
+    for (const Material& m : own) print(m);
   });
 }
 

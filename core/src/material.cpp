@@ -106,6 +106,14 @@ nlohmann::json user_materials_json(const std::string& path) {
 
 }  // namespace
 
+std::vector<Material> user_material_presets() {
+  const std::string path = user_materials_path();
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) return {};
+  const auto bytes = read_input_file(path, "materials file", kMaxTextInputBytes);
+  return parse_materials(std::string(bytes.begin(), bytes.end()), path);
+}
+
 void check_material_name(const std::string& name) {
   const bool ok =
       !name.empty() && name.size() <= 64 && std::all_of(name.begin(), name.end(), [](char c) {
@@ -144,18 +152,12 @@ void save_user_material(const Material& m) {
 Material find_material(std::string_view name) {
   for (const Material& m : material_presets())
     if (m.name == name) return m;
-  const std::string user = user_materials_path();
-  std::error_code ec;
-  std::vector<Material> own;
-  if (std::filesystem::exists(user, ec)) {
-    const auto bytes = read_input_file(user, "materials file", kMaxTextInputBytes);
-    own = parse_materials(std::string(bytes.begin(), bytes.end()), user);
-    for (const Material& m : own)
-      if (m.name == name) return m;
-  }
+  const std::vector<Material> own = user_material_presets();
+  for (const Material& m : own)
+    if (m.name == name) return m;
   std::string known;
   for (const Material& m : material_presets()) known += (known.empty() ? "" : ", ") + m.name;
-  for (const Material& m : own) known += ", " + m.name + " (" + user + ")";
+  for (const Material& m : own) known += ", " + m.name + " (" + user_materials_path() + ")";
   throw InputError("unknown material '" + std::string(name) + "'; known: " + known);
 }
 

@@ -37,6 +37,10 @@ Material find_material(std::string_view name);
 /// the format of data/materials.json; find_material() looks there after the shipped presets.
 std::string user_materials_path();
 
+/// The user's presets (empty when the file does not exist). Throws InputError naming the file
+/// when it is malformed.
+std::vector<Material> user_material_presets();
+
 /// Throws InputError unless `name` can name a user preset: 1 to 64 letters, digits, '-', '_' or
 /// '.', and not the name of a shipped preset.
 void check_material_name(const std::string& name);

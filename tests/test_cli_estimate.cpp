@@ -1,0 +1,107 @@
+// chladni estimate end to end: a soundbank struck by `chladni render`, its material and damping
+// recovered, saved as a preset and used by precompute; bad input exits with 2 and names it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "chladni/core/damping.hpp"
+#include "cli_support.hpp"
+#include "test_support.hpp"
+
+namespace {
+
+using chladni::test::run_cli;
+using chladni::test::temp_path;
+
+constexpr double kTwoPi = 6.283185307179586;
+
+// The bar (steel, power:3e-4,0.5) struck on its top face, heard 1 m above: a bank made once.
+struct StruckBar {
+  std::string bank = temp_path("est_cli_bar.chbank"), wav = temp_path("est_cli_bar.wav");
+  StruckBar() {
+    auto r = run_cli("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank +
+                     " --max-modes 14 --no-transfer --quiet");
+    EXPECT_EQ(r.code, 0) << r.output;
+    const std::string scene =
+        chladni::test::write_temp("est_cli_scene.json",
+                                  R"({"sample_rate": 44100, "channels": 1, "duration": 2.5,
+            "listener": {"position": [0.05, 0, 1], "forward": [0, 1, 0], "up": [0, 0, 1]},
+            "objects": [{"name": "bar", "soundbank": ")" +
+                                      bank + R"("}],
+            "events": [{"time": 0.02, "type": "impact", "object": "bar", "impulse": 0.02,
+                        "direction": [0, 0, -1], "point": [0.05, 0.004, 0.005],
+                        "contact_time": 0.0002}]})");
+    r = run_cli("render " + scene + " -o " + wav + " --quiet");
+    EXPECT_EQ(r.code, 0) << r.output;
+  }
+};
+
+const StruckBar& struck_bar() {
+  static const StruckBar bar;
+  return bar;
+}
+
+TEST(CliEstimate, RecoversTheBanksMaterialAndSavesItAsAPreset) {
+  const StruckBar& bar = struck_bar();
+  const std::string json = temp_path("est_cli.json"), resynth = temp_path("est_cli_re.wav"),
+                    presets = temp_path("est_cli_materials.json");
+  std::filesystem::remove(presets);
+  const std::string env = "CHLADNI_MATERIALS=" + presets;
+  auto r = run_cli("estimate " + bar.wav + " --bank " + bar.bank +
+                       " --hit-point 0.05,0.004,0.005 --listener 0.05,0,1 --json " + json +
+                       " --resynth " + resynth + " --save-material my-bar",
+                   env);
+  ASSERT_EQ(r.code, 0) << r.output;
+  const auto j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_NEAR(j["material"]["frequency_scale"].get<double>(), 1.0, 0.005);
+  EXPECT_NEAR(j["material"]["E_pa"].get<double>(), 200e9, 0.01 * 200e9);
+  EXPECT_NEAR(j["material"]["contact_time_s"].get<double>(), 2e-4, 0.5e-4);
+  const auto fitted = chladni::DampingModel::parse(j["material"]["damping"].get<std::string>());
+  const chladni::DampingModel truth{chladni::DampingModel::Kind::PowerLaw, {3e-4, 0.5}};
+  for (double f = 100; f <= 10000; f *= 1.5)
+    EXPECT_NEAR(fitted.coefficient(kTwoPi * f) / truth.coefficient(kTwoPi * f), 1.0, 0.03) << f;
+  EXPECT_GE(j["features"].size(), 6u);
+  EXPECT_TRUE(std::filesystem::file_size(resynth) > 1000);
+
+  // The saved preset is a material precompute takes by name.
+  r = run_cli("materials", env);
+  EXPECT_NE(r.output.find("my-bar"), std::string::npos) << r.output;
+  const std::string bank2 = temp_path("est_cli_mybar.chbank");
+  r = run_cli("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank2 +
+                  " --material my-bar --max-modes 4 --no-transfer --quiet",
+              env);
+  ASSERT_EQ(r.code, 0) << r.output;
+  r = run_cli("info " + bank2 + " --json");
+  EXPECT_EQ(nlohmann::json::parse(r.output)["material"]["name"], "my-bar");
+}
+
+TEST(CliEstimate, BadInputExitsWith2AndNamesIt) {
+  const StruckBar& bar = struck_bar();
+  const std::string dir = temp_path("");
+  struct Case {
+    std::string args, words;
+  };
+  const Case cases[] = {
+      {"", "name a recording"},
+      {"/nonexistent/strike.wav", "/nonexistent/strike.wav: no such file"},
+      {dir, "not a regular file"},
+      {bar.wav + " --explained nan", "--explained"},
+      {bar.wav + " --damping caughey:9", "caughey:K"},
+      {bar.wav + " --bank " + bar.bank, "--hit-vertex or --hit-point"},
+      {bar.wav + " --hit-vertex 3", "need --bank or --mesh"},
+      {bar.wav + " --bank " + bar.bank + " --hit-vertex 99999999", "out of range"},
+      {bar.wav + " --bank " + bar.bank + " --hit-vertex 1 --save-material steel", "shipped preset"},
+      {bar.wav + " --start 5", "nothing between"},
+      {bar.wav + " --json " + dir, "--json"},
+  };
+  for (const Case& c : cases) {
+    const auto r = run_cli("estimate " + c.args);
+    EXPECT_EQ(r.code, 2) << c.args << "\n" << r.output;
+    EXPECT_NE(r.output.find(c.words), std::string::npos) << c.args << "\n" << r.output;
+  }
+}
+
+}  // namespace
