@@ -6,8 +6,10 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <thread>
 
 #include "chladni/core/error.hpp"
+#include "chladni/runtime/thread_pool.hpp"
 #include "mode_track.hpp"
 
 namespace chladni::estimate {
@@ -38,26 +40,43 @@ struct LongSpectrum {
   double window_power = 0;   ///< sum of w^2
 };
 
-LongSpectrum long_spectrum(const std::vector<double>& r, double fs, std::size_t L) {
-  std::size_t n = 1;
-  while (n < 2 * L) n <<= 1;
-  std::vector<double> in(n, 0.0);
-  LongSpectrum s;
-  for (std::size_t i = 0; i < L; ++i) {
-    const double c = std::cos(std::numbers::pi * 0.5 * double(i) / double(L));
-    in[i] = r[i] * c * c;
-    s.window_power += c * c * c * c;
+// The long spectrum's buffers, window and FFT plan, made once per analysis.
+class LongTransform {
+ public:
+  LongTransform(std::size_t L) : L_(L) {
+    while (n_ < 2 * L) n_ <<= 1;
+    in_.assign(n_, 0.0);
+    out_.resize(n_ / 2 + 1);
+    window_.resize(L);
+    for (std::size_t i = 0; i < L; ++i) {
+      const double c = std::cos(std::numbers::pi * 0.5 * double(i) / double(L));
+      window_[i] = c * c;
+      power_ += window_[i] * window_[i];
+    }
+    plan_ = fftw_plan_dft_r2c_1d(int(n_), in_.data(), reinterpret_cast<fftw_complex*>(out_.data()),
+                                 FFTW_ESTIMATE);
   }
-  std::vector<fftw_complex> out(n / 2 + 1);
-  fftw_plan plan = fftw_plan_dft_r2c_1d(int(n), in.data(), out.data(), FFTW_ESTIMATE);
-  fftw_execute(plan);
-  fftw_destroy_plan(plan);
-  s.mag.resize(n / 2 + 1);
-  for (std::size_t k = 0; k < s.mag.size(); ++k) s.mag[k] = std::hypot(out[k][0], out[k][1]);
-  s.bin_hz = fs / double(n);
-  s.resolution_hz = fs / double(L);
-  return s;
-}
+  ~LongTransform() { fftw_destroy_plan(plan_); }
+  LongTransform(const LongTransform&) = delete;
+  LongTransform& operator=(const LongTransform&) = delete;
+
+  void of(const std::vector<double>& r, double fs, LongSpectrum& s) {
+    for (std::size_t i = 0; i < L_; ++i) in_[i] = r[i] * window_[i];
+    fftw_execute(plan_);
+    s.mag.resize(n_ / 2 + 1);
+    for (std::size_t k = 0; k < s.mag.size(); ++k) s.mag[k] = std::abs(out_[k]);
+    s.bin_hz = fs / double(n_);
+    s.resolution_hz = fs / double(L_);
+    s.window_power = power_;
+  }
+
+ private:
+  std::size_t L_, n_ = 1;
+  double power_ = 0;
+  std::vector<double> in_, window_;
+  std::vector<cd> out_;  // std::complex is layout-compatible with fftw_complex
+  fftw_plan plan_;
+};
 
 // Median of v[lo, hi).
 double median_of(const std::vector<double>& v, std::size_t lo, std::size_t hi) {
@@ -162,7 +181,13 @@ FeatureSet extract_features(std::span<const double> x, double fs, const FeatureO
   }
   // Long enough to separate partials a few Hz apart, short enough to stay on the sound.
   const std::size_t L = std::min(r.size(), std::size_t(std::lround(4.0 * fs)));
+  LongTransform transform(L);
+  LongSpectrum s;
+  const HannWindows windows(fs);
+  runtime::ThreadPool pool(o.threads > 0 ? o.threads
+                                         : int(std::max(1u, std::thread::hardware_concurrency())));
   std::vector<Zone> excluded;
+  std::vector<double> trial;
   const double tried_zone = 3 * fs / double(L);
   int idle_rounds = 0;
   auto own_zone = [&](const Feature& g) { return std::max(tried_zone, 2 * fs / double(g.window)); };
@@ -173,15 +198,39 @@ FeatureSet extract_features(std::span<const double> x, double fs, const FeatureO
   };
   for (std::size_t round = 0; round < 4 * o.max_features; ++round) {
     if (done()) break;
-    const LongSpectrum s = long_spectrum(r, fs, L);
-    const auto peaks = pick_peaks(s, o.min_frequency, fmax, o.min_snr_db, excluded, 4);
+    transform.of(r, fs, s);
+    const auto peaks = pick_peaks(s, o.min_frequency, fmax, o.min_snr_db, excluded, 8);
     if (peaks.empty() || idle_rounds >= 3) break;
     const std::size_t before = set.features.size();
-    for (const Candidate& c : peaks) {
+    // The round's candidates are fitted on all threads against the same residual, then taken
+    // one by one in order of clarity.
+    struct Job {
+      const std::vector<double>* r;
+      const std::vector<Candidate>* peaks;
+      const HannWindows* windows;
+      double fs;
+      std::vector<Feature> fits;
+      std::vector<char> ok;
+    } job{&r,
+          &peaks,
+          &windows,
+          fs,
+          std::vector<Feature>(peaks.size()),
+          std::vector<char>(peaks.size(), 0)};
+    pool.run(
+        [](void* ctx, int i) {
+          auto& j = *static_cast<Job*>(ctx);
+          const Candidate& c = (*j.peaks)[std::size_t(i)];
+          j.ok[std::size_t(i)] = fit_partial(*j.r, j.fs, c.frequency, c.noise_sigma, *j.windows,
+                                             j.fits[std::size_t(i)]);
+        },
+        &job, int(peaks.size()));
+    for (std::size_t i = 0; i < peaks.size(); ++i) {
+      const Candidate& c = peaks[i];
       excluded.push_back({c.frequency, tried_zone});
       if (done()) break;
-      Feature f;
-      if (!fit_partial(r, fs, c.frequency, c.noise_sigma, f)) continue;
+      if (!job.ok[i]) continue;
+      Feature f = job.fits[i];
       // A fit within two bins (of its own frame) of a partial already taken is what that
       // partial's subtraction left, not a new one; a decay less certain than itself is noise.
       if (std::any_of(set.features.begin(), set.features.end(),
@@ -192,12 +241,12 @@ FeatureSet extract_features(std::span<const double> x, double fs, const FeatureO
         excluded.push_back({f.frequency, tried_zone});
         continue;
       }
-      std::vector<double> trial = r;
+      trial.assign(r.begin(), r.end());  // reuses its storage: no page faults per candidate
       subtract_partial(trial, fs, f);
       const double after = energy(trial);
       if (!(after < left)) continue;  // the fit did not describe what is there
       f.energy_share = (left - after) / total;
-      r = std::move(trial);
+      std::swap(r, trial);
       left = after;
       set.features.push_back(f);
       excluded.push_back({f.frequency, own_zone(f)});

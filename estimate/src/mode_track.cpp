@@ -56,8 +56,8 @@ Line fit_line(const std::vector<double>& t, const std::vector<double>& y,
     const double e = y[i] - l.intercept - l.slope * t[i];
     ss += w[i] * e * e;
   }
-  // Frames overlapping by 3/4 share their noise (correlation 0.66, 0.17 and 0.006 at lags 1-3
-  // for a Hann window), which inflates the slope's variance by 1 + 2 sum rho = 2.67.
+  // Hann frames overlapping by 3/4 share their noise (correlation 0.66, 0.17 and 0.01 at lags
+  // 1-3, Harris 1978), which inflates the slope's variance by up to 1 + 2 sum rho = 2.67.
   l.slope_sigma = std::sqrt(2.67 * ss / std::max(double(t.size()) - 2, 1.0) / stt);
   return l;
 }
@@ -67,26 +67,22 @@ struct Track {
   double score = INFINITY;
 };
 
-// One frame length M (Hann, hop M/4): the frames from the start while the partial stands 12 dB
-// above the noise (where ln|S + N| is still nearly unbiased) and at most 80 dB down, then the two
+// One frame length M (Hann, hop M/4) of r demodulated at omega: the frames from the start while
+// the partial stands 12 dB above the noise (where ln|S + N| is still nearly unbiased) and at most
+// 80 dB down (256 at most), then the two
 // line fits, each frame weighted by its signal-to-noise ratio squared (the inverse variance of
 // ln|X| and of arg X) with a floor for what noise does not explain (beats with neighbours).
 bool fit_at(const std::vector<double>& r, double fs, double omega, double noise_sigma,
-            std::size_t M, Track& out) {
-  const std::size_t hop = M / 4;
+            const std::vector<double>& w, Demodulated& demod, Track& out) {
+  const std::size_t M = w.size(), hop = M / 4;
   if (r.size() < M + 3 * hop) return false;
-  std::vector<double> w(M);
-  double wsum2 = 0;
-  for (std::size_t n = 0; n < M; ++n) {
-    w[n] = 0.5 - 0.5 * std::cos(kTwoPi * (double(n) + 0.5) / double(M));
-    wsum2 += w[n] * w[n];
-  }
+  const double wsum2 = 0.375 * double(M);  // sum of a periodic Hann window's squares
   const double noise = noise_sigma * std::sqrt(wsum2);
   const double floor = 4 * noise;
-  Demodulated demod(r, omega);
   std::vector<double> t, mag, ph, weight;
   double first = 0;
-  for (std::size_t s = 0; s + M <= r.size(); s += hop) {
+  // 256 frames fix a decay well; a longer frame length sees further if the partial rings on.
+  for (std::size_t s = 0; s + M <= r.size() && t.size() < 256; s += hop) {
     const cd* z = demod.upto(s + M) + s;
     cd X = 0;
     for (std::size_t n = 0; n < M; ++n) X += w[n] * z[n];
@@ -110,8 +106,10 @@ bool fit_at(const std::vector<double>& r, double fs, double omega, double noise_
   f.frequency_sigma = lp.slope_sigma / kTwoPi;
   // (A/2) e^{i phi} = e^{c} / W(delta, d), W = sum_n w_n e^{(i delta - d)(n - M/2)/fs}.
   cd W = 0;
-  for (std::size_t n = 0; n < M; ++n)
-    W += w[n] * std::exp(cd(-f.decay, delta) * ((double(n) + 0.5 - 0.5 * double(M)) / fs));
+  const cd rate(-f.decay, delta);
+  const cd step = std::exp(rate / fs);
+  cd term = std::exp(rate * ((0.5 - 0.5 * double(M)) / fs));
+  for (std::size_t n = 0; n < M; ++n, term *= step) W += w[n] * term;
   const cd half = std::exp(cd(lm.intercept, lp.intercept)) / W;
   f.amplitude = 2 * std::abs(half);
   f.phase = std::arg(half);
@@ -123,41 +121,53 @@ bool fit_at(const std::vector<double>& r, double fs, double omega, double noise_
 
 }  // namespace
 
-bool fit_partial(const std::vector<double>& r, double fs, double frequency, double noise_sigma,
-                 Feature& out) {
-  // Frame lengths from about 6 ms to 0.75 s at any sample rate.
+HannWindows::HannWindows(double fs) {
   std::size_t shortest = 256;
   while (double(shortest) < 0.0058 * fs) shortest <<= 1;
-  Track best;
   for (std::size_t M = shortest; double(M) <= 0.75 * fs; M <<= 1) {
-    double omega = kTwoPi * frequency / fs;
+    std::vector<double> w(M);
+    for (std::size_t n = 0; n < M; ++n)
+      w[n] = 0.5 - 0.5 * std::cos(kTwoPi * (double(n) + 0.5) / double(M));
+    windows_.push_back(std::move(w));
+  }
+}
+
+bool fit_partial(const std::vector<double>& r, double fs, double frequency, double noise_sigma,
+                 const HannWindows& windows, Feature& out) {
+  // Every frame length, all at the peak's frequency.
+  const double omega = kTwoPi * frequency / fs;
+  Demodulated demod(r, omega);
+  Track best;
+  const std::vector<double>* chosen = nullptr;
+  for (const std::vector<double>& w : windows.all()) {
+    const std::size_t M = w.size();
     Track tr;
-    bool ok = false;
-    for (int pass = 0; pass < 3; ++pass) {  // refine the frequency, then fit at it
-      ok = fit_at(r, fs, omega, noise_sigma, M, tr);
-      if (!ok) break;
-      const double next = kTwoPi * tr.f.frequency / fs;
-      // A refined frequency more than half a bin away belongs to a neighbour: keep the first.
-      if (std::abs(next - kTwoPi * frequency / fs) > std::numbers::pi / double(M)) {
-        ok = false;
-        break;
-      }
-      omega = next;
-    }
-    if (ok && tr.score < best.score) best = tr;
+    if (!fit_at(r, fs, omega, noise_sigma, w, demod, tr)) continue;
+    // A refined frequency more than half a bin away belongs to a neighbour.
+    if (std::abs(kTwoPi * tr.f.frequency / fs - omega) > std::numbers::pi / double(M)) continue;
+    if (tr.score < best.score) best = tr, chosen = &w;
   }
   if (!std::isfinite(best.score)) return false;
+  // Again at the best frame length, demodulated at the refined frequency, when it moved by more
+  // than a fiftieth of a bin (the window's response then no longer tilts the decay).
+  const double refined = kTwoPi * best.f.frequency / fs;
+  const std::size_t M = best.f.window;
+  if (std::abs(refined - omega) > 0.02 * kTwoPi / double(M)) {
+    Demodulated again(r, refined);
+    Track tr;
+    if (fit_at(r, fs, refined, noise_sigma, *chosen, again, tr)) best = tr;
+  }
   out = best.f;
   return true;
 }
 
 void add_partial(std::vector<double>& r, double fs, const Feature& f, double gain) {
-  const cd step = std::exp(cd(-f.decay, kTwoPi * f.frequency) / fs);
-  cd ph = gain * f.amplitude * std::polar(1.0, f.phase);
+  const cd rate(-f.decay, kTwoPi * f.frequency);
+  const cd step = std::exp(rate / fs);
+  cd ph = 0;
   for (std::size_t n = 0; n < r.size(); ++n) {
-    if ((n & 1023) == 0)
-      ph = gain * f.amplitude *
-           std::exp(cd(-f.decay, kTwoPi * f.frequency) * (double(n) / fs) + cd(0, f.phase));
+    if ((n & 1023) == 0)  // renewed exactly, so rounding does not build up
+      ph = gain * f.amplitude * std::exp(rate * (double(n) / fs) + cd(0, f.phase));
     r[n] += ph.real();
     ph *= step;
   }

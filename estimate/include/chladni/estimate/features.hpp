@@ -32,6 +32,7 @@ struct FeatureOptions {
   double min_frequency = 20;  ///< Hz
   double max_frequency = 0;   ///< Hz; 0: 0.45 of the sample rate
   double min_snr_db = 12;     ///< a peak must stand this far above the spectrum's floor
+  int threads = 0;            ///< candidates of a round fitted in parallel; 0: all cores
 };
 
 struct FeatureSet {
