@@ -25,8 +25,9 @@ namespace chladni::cli {
 namespace {
 
 struct EstimateArgs {
-  std::string recording, damping = "power", json_path, resynth, bank, mesh, listener, material,
-                         save_material, hit_point;
+  std::vector<std::string> recordings;
+  std::string damping = "power", json_path, resynth, bank, mesh, listener, material, save_material,
+              hit_point;
   double start = 0, end = 0, explained = 0.9, min_freq = 20, max_freq = 0, rho = 0, nu = 0;
   std::size_t max_features = 64, hit_vertex = 0, starts = 4, mesh_modes = 60;
   bool quiet = false, hit_given = false;
@@ -120,7 +121,7 @@ estimate::FeatureSet features_of(const estimate::Recording& rec, const EstimateA
   estimate::FeatureSet set = estimate::extract_features(rec.samples, rec.sample_rate, fo);
   seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (set.features.empty())
-    throw InputError("recording " + a.recording + ": no partial stands above the noise");
+    throw InputError("recording " + rec.origin + ": no partial stands above the noise");
   return set;
 }
 
@@ -149,7 +150,7 @@ nlohmann::json material_json(const estimate::MaterialFit& fit, const Material& m
 }
 
 void check_args(const EstimateArgs& a) {
-  if (a.recording.empty()) throw InputError("name a recording (WAV, FLAC, ...)");
+  if (a.recordings.empty()) throw InputError("name a recording (WAV, FLAC, ...)");
   if (!a.bank.empty() && !a.mesh.empty()) throw InputError("give --bank or --mesh, not both");
   const bool object = !a.bank.empty() || !a.mesh.empty();
   if (object && a.hit_given == !a.hit_point.empty())
@@ -160,24 +161,58 @@ void check_args(const EstimateArgs& a) {
     throw InputError("--hit-vertex, --hit-point and --listener need --bank or --mesh");
   if (!a.save_material.empty() && !object)
     throw InputError("--save-material needs an object (--bank or --mesh) to find E from");
+  if (a.recordings.size() > 1 && (object || !a.resynth.empty()))
+    throw InputError(
+        "several recordings share one damping curve; --bank, --mesh and --resynth "
+        "take one recording");
   if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
   if (!a.resynth.empty()) check_output_path(a.resynth, "--resynth");
   if (!a.save_material.empty()) check_material_name(a.save_material);
 }
 
-void print_summary(const EstimateArgs& a, const estimate::Recording& rec,
-                   const estimate::FeatureSet& set, const estimate::DampingFit& curve,
-                   double seconds) {
-  std::printf(
-      "%s: %.3f s at %g Hz (%d channel%s), strike at %.3f s; %zu partials explain %.1f%% "
-      "of the energy (%.3f s)\n",
-      a.recording.c_str(), double(rec.samples.size()) / rec.sample_rate, rec.sample_rate,
-      rec.channels, rec.channels == 1 ? "" : "s, mixed to mono",
-      double(set.origin) / rec.sample_rate + a.start, set.features.size(), 100 * set.explained,
-      seconds);
-  print_features(set);
-  std::printf("damping through the partials: %s (%zu partials, weighted rms error %.1f%%)\n",
-              curve.model.to_string().c_str(), curve.partials, 100 * curve.rms_relative_error);
+// One recording read, checked and analysed.
+struct Analysed {
+  estimate::Recording rec;
+  estimate::FeatureSet set;
+  double seconds = 0;
+};
+
+Analysed analyse(const std::string& file, const EstimateArgs& a) {
+  Analysed out;
+  out.rec = estimate::read_recording(file, {a.start, a.end});
+  estimate::check_recording(out.rec);
+  if (out.rec.clipped > 0 && !a.quiet)
+    std::fprintf(stderr, "warning: %s: %zu samples are clipped; analysis starts after the last\n",
+                 file.c_str(), out.rec.clipped);
+  out.set = features_of(out.rec, a, out.seconds);
+  if (!a.quiet) {
+    const auto& rec = out.rec;
+    std::printf(
+        "%s: %.3f s at %g Hz (%d channel%s), strike at %.3f s; %zu partials explain "
+        "%.1f%% of the energy (%.3f s)\n",
+        file.c_str(), double(rec.samples.size()) / rec.sample_rate, rec.sample_rate, rec.channels,
+        rec.channels == 1 ? "" : "s, mixed to mono",
+        double(out.set.origin) / rec.sample_rate + a.start, out.set.features.size(),
+        100 * out.set.explained, out.seconds);
+    print_features(out.set);
+  }
+  return out;
+}
+
+nlohmann::json recording_json(const Analysed& an, const EstimateArgs& a) {
+  const auto& rec = an.rec;
+  nlohmann::json features = nlohmann::json::array();
+  for (const auto& f : an.set.features) features.push_back(feature_json(f));
+  return {{"file", rec.origin},
+          {"sample_rate_hz", rec.sample_rate},
+          {"channels", rec.channels},
+          {"clipped_samples", rec.clipped},
+          {"start_s", a.start},
+          {"strike_s", double(an.set.origin) / rec.sample_rate + a.start},
+          {"analysed_s", an.set.duration},
+          {"explained", an.set.explained},
+          {"features_time_s", an.seconds},
+          {"features", features}};
 }
 
 // The material of the struck object; fills j["object"], j["material"] and the resynthesis.
@@ -201,7 +236,7 @@ void fit_object(const EstimateArgs& a, const estimate::Recording& rec,
   m.name = a.save_material.empty() ? "estimated" : a.save_material;
   m.youngs_modulus = fit.gamma * m.density;
   m.damping = fit.damping;
-  m.source = "estimated by chladni estimate from " + a.recording + " struck on " + obj.origin +
+  m.source = "estimated by chladni estimate from " + rec.origin + " struck on " + obj.origin +
              " (vertex " + std::to_string(hit) + "); nu and rho assumed";
   if (!a.quiet)
     std::printf(
@@ -227,51 +262,42 @@ void fit_object(const EstimateArgs& a, const estimate::Recording& rec,
   }
 }
 
-void write_json(const EstimateArgs& a, const estimate::Recording& rec,
-                const estimate::FeatureSet& set, const estimate::DampingFit& curve,
-                double t_features, nlohmann::json& j) {
-  j["recording"] = {
-      {"file", a.recording},       {"sample_rate_hz", rec.sample_rate},
-      {"channels", rec.channels},  {"clipped_samples", rec.clipped},
-      {"start_s", a.start},        {"strike_s", double(set.origin) / rec.sample_rate + a.start},
-      {"analysed_s", set.duration}};
-  j["features"] = nlohmann::json::array();
-  for (const auto& f : set.features) j["features"].push_back(feature_json(f));
-  j["explained"] = set.explained;
-  j["damping_curve"] = {{"model", curve.model.to_string()},
-                        {"partials", curve.partials},
-                        {"rms_relative_error", curve.rms_relative_error},
-                        {"warnings", curve.warnings}};
-  j["timing_s"]["features"] = t_features;
-  write_file_atomic(a.json_path, j.dump(2) + "\n", "--json");
-  if (!a.quiet) std::printf("wrote %s\n", a.json_path.c_str());
-}
-
 void run_estimate(const EstimateArgs& a) {
   check_args(a);
   const DampingModel shape = estimate::damping_kind(a.damping);
-  const auto rec = estimate::read_recording(a.recording, {a.start, a.end});
-  estimate::check_recording(rec);
-  if (rec.clipped > 0 && !a.quiet)
-    std::fprintf(stderr, "warning: %s: %zu samples are clipped; analysis starts after the last\n",
-                 a.recording.c_str(), rec.clipped);
-  double t_features = 0;
-  const estimate::FeatureSet set = features_of(rec, a, t_features);
-  const estimate::DampingFit curve = estimate::fit_damping(set.features, shape);
-  if (!a.quiet) print_summary(a, rec, set, curve, t_features);
+  std::vector<Analysed> all;
+  std::vector<estimate::Feature> pooled;
+  for (const std::string& file : a.recordings) {
+    all.push_back(analyse(file, a));
+    pooled.insert(pooled.end(), all.back().set.features.begin(), all.back().set.features.end());
+  }
+  const estimate::DampingFit curve = estimate::fit_damping(pooled, shape);
+  if (!a.quiet)
+    std::printf("damping through the partials%s: %s (%zu partials, weighted rms error %.1f%%)\n",
+                all.size() > 1 ? " of every recording" : "", curve.model.to_string().c_str(),
+                curve.partials, 100 * curve.rms_relative_error);
   for (const auto& w : curve.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
   nlohmann::json j;
-  std::vector<estimate::Feature> sound = set.features;
-  if (!a.bank.empty() || !a.mesh.empty()) fit_object(a, rec, set, curve, j, sound);
+  const Analysed& first = all.front();
+  std::vector<estimate::Feature> sound = first.set.features;
+  if (!a.bank.empty() || !a.mesh.empty()) fit_object(a, first.rec, first.set, curve, j, sound);
   if (!a.resynth.empty()) {
     AudioBuffer out;
-    out.sample_rate = int(std::lround(rec.sample_rate));
-    const auto y = estimate::synthesize(sound, rec.sample_rate, set.residual.size());
+    out.sample_rate = int(std::lround(first.rec.sample_rate));
+    const auto y = estimate::synthesize(sound, first.rec.sample_rate, first.set.residual.size());
     out.samples.assign(y.begin(), y.end());
     write_wav(a.resynth, out);
     if (!a.quiet) std::printf("wrote %s\n", a.resynth.c_str());
   }
-  if (!a.json_path.empty()) write_json(a, rec, set, curve, t_features, j);
+  if (!a.json_path.empty()) {
+    for (const Analysed& an : all) j["recordings"].push_back(recording_json(an, a));
+    j["damping_curve"] = {{"model", curve.model.to_string()},
+                          {"partials", curve.partials},
+                          {"rms_relative_error", curve.rms_relative_error},
+                          {"warnings", curve.warnings}};
+    write_file_atomic(a.json_path, j.dump(2) + "\n", "--json");
+    if (!a.quiet) std::printf("wrote %s\n", a.json_path.c_str());
+  }
 }
 
 }  // namespace
@@ -279,8 +305,10 @@ void run_estimate(const EstimateArgs& a) {
 void add_estimate(CLI::App& app) {
   auto a = std::make_shared<EstimateArgs>();
   CLI::App* cmd = app.add_subcommand(
-      "estimate", "Partials, damping and material from a recording of one strike");
-  cmd->add_option("recording", a->recording, "WAV, FLAC, ... (channels are mixed to mono)");
+      "estimate", "Partials, damping and material from recordings of single strikes");
+  cmd->add_option("recordings", a->recordings,
+                  "WAV, FLAC, ... (channels are mixed to mono); several recordings of one "
+                  "material share one damping curve");
   cmd->add_option("--damping", a->damping, "Model: rayleigh, caughey:K, power or hybrid")
       ->capture_default_str();
   cmd->add_option("--start", a->start, "Seconds into the file where analysis may begin")

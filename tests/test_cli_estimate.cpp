@@ -18,12 +18,12 @@ using chladni::test::temp_path;
 
 constexpr double kTwoPi = 6.283185307179586;
 
-// The bar (steel, power:3e-4,0.5) struck on its top face, heard 1 m above: a bank made once.
+// The bar (steel:constant, power:3e-4,0.5) struck on its top face, heard 1 m above: a bank made once.
 struct StruckBar {
   std::string bank = temp_path("est_cli_bar.chbank"), wav = temp_path("est_cli_bar.wav");
   StruckBar() {
     auto r = run_cli("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank +
-                     " --max-modes 14 --no-transfer --quiet");
+                     " --max-modes 14 --no-transfer --material steel:constant --quiet");
     EXPECT_EQ(r.code, 0) << r.output;
     const std::string scene =
         chladni::test::write_temp("est_cli_scene.json",
@@ -63,7 +63,7 @@ TEST(CliEstimate, RecoversTheBanksMaterialAndSavesItAsAPreset) {
   const chladni::DampingModel truth{chladni::DampingModel::Kind::PowerLaw, {3e-4, 0.5}};
   for (double f = 100; f <= 10000; f *= 1.5)
     EXPECT_NEAR(fitted.coefficient(kTwoPi * f) / truth.coefficient(kTwoPi * f), 1.0, 0.03) << f;
-  EXPECT_GE(j["features"].size(), 6u);
+  EXPECT_GE(j["recordings"][0]["features"].size(), 6u);
   EXPECT_TRUE(std::filesystem::file_size(resynth) > 1000);
 
   // The saved preset is a material precompute takes by name.
@@ -96,6 +96,7 @@ TEST(CliEstimate, BadInputExitsWith2AndNamesIt) {
       {bar.wav + " --bank " + bar.bank + " --hit-vertex 1 --save-material steel", "shipped preset"},
       {bar.wav + " --start 5", "nothing between"},
       {bar.wav + " --json " + dir, "--json"},
+      {bar.wav + " " + bar.wav + " --resynth " + temp_path("est_two.wav"), "one recording"},
   };
   for (const Case& c : cases) {
     const auto r = run_cli("estimate " + c.args);
