@@ -142,6 +142,8 @@ nlohmann::json material_json(const estimate::MaterialFit& fit, const Material& m
           {"nu", m.poisson_ratio},
           {"rho_kg_m3", m.density},
           {"damping", fit.damping.to_string()},
+          {"search_damping", fit.search_damping.to_string()},
+          {"matched_partials", fit.matched_partials},
           {"metric", {{"psycho", fit.psycho}, {"mrp", fit.mrp}, {"hybrid", fit.hybrid}}},
           {"evaluations", fit.evaluations},
           {"starts", fit.starts_tried},
@@ -294,6 +296,7 @@ void run_estimate(const EstimateArgs& a) {
     j["damping_curve"] = {{"model", curve.model.to_string()},
                           {"partials", curve.partials},
                           {"rms_relative_error", curve.rms_relative_error},
+                          {"scatter", curve.spread},
                           {"warnings", curve.warnings}};
     write_file_atomic(a.json_path, j.dump(2) + "\n", "--json");
     if (!a.quiet) std::printf("wrote %s\n", a.json_path.c_str());

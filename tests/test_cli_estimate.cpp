@@ -18,7 +18,8 @@ using chladni::test::temp_path;
 
 constexpr double kTwoPi = 6.283185307179586;
 
-// The bar (steel:constant, power:3e-4,0.5) struck on its top face, heard 1 m above: a bank made once.
+// The bar (steel:constant, power:3e-4,0.5) struck on its top face, heard 1 m above: a bank
+// made once.
 struct StruckBar {
   std::string bank = temp_path("est_cli_bar.chbank"), wav = temp_path("est_cli_bar.wav");
   StruckBar() {

@@ -14,9 +14,11 @@ using Kind = DampingModel::Kind;
 
 struct Point {
   double x, c, weight;  // x = omega^2, c = 2 d
+  double scale;         // the residual's denominator: c, then the last fit's beta (log errors)
 };
 
-// Weighted least squares of sum_k a_k g_k(x_j) against c_j in relative error; `keep` marks the
+// Weighted least squares of sum_k a_k g_k(x_j) against c_j, each residual divided by its
+// point's scale (c_j, then the last fit's beta: Gauss-Newton on the log error); `keep` marks the
 // basis functions left free (the others are held at 0). Columns are scaled to unit norm so the
 // powers of omega^2 (1 to 1e20) do not ruin the conditioning.
 Eigen::VectorXd relative_lsq(const std::vector<Point>& pts,
@@ -29,9 +31,9 @@ Eigen::VectorXd relative_lsq(const std::vector<Point>& pts,
   Eigen::MatrixXd A(n, cols.size());
   Eigen::VectorXd b(n);
   for (std::size_t j = 0; j < n; ++j) {
-    const double s = std::sqrt(pts[j].weight) / pts[j].c;
+    const double s = std::sqrt(pts[j].weight) / pts[j].scale;
     for (std::size_t q = 0; q < cols.size(); ++q) A(long(j), long(q)) = basis[cols[q]][j] * s;
-    b(long(j)) = std::sqrt(pts[j].weight);
+    b(long(j)) = pts[j].c * s;
   }
   Eigen::VectorXd scale = A.colwise().norm().transpose();
   for (long q = 0; q < scale.size(); ++q)
@@ -46,7 +48,7 @@ Eigen::VectorXd relative_lsq(const std::vector<Point>& pts,
 double weighted_rms(const std::vector<Point>& pts, const DampingModel& model) {
   double num = 0, den = 0;
   for (const Point& p : pts) {
-    const double e = model.coefficient(std::sqrt(p.x)) / p.c - 1;
+    const double e = std::log(model.coefficient(std::sqrt(p.x)) / p.c);
     num += p.weight * e * e;
     den += p.weight;
   }
@@ -140,13 +142,57 @@ DampingModel damping_kind(const std::string& text) {
   throw InputError("--damping '" + text + "': expected rayleigh, caughey:K, power or hybrid");
 }
 
+namespace {
+
+DampingModel fit_model(const std::vector<Point>& pts, const DampingModel& shape) {
+  switch (shape.kind) {
+    case Kind::Rayleigh:
+      return {Kind::Rayleigh, linear_fit(pts, powers(pts, 2), true)};
+    case Kind::Caughey:
+      return {Kind::Caughey, linear_fit(pts, powers(pts, shape.alpha.size()), false)};
+    case Kind::PowerLaw:
+      return fit_power(pts);
+    case Kind::Hybrid:
+      return fit_hybrid(pts);
+  }
+  return shape;
+}
+
+// The scatter of real partials about any smooth curve (mode types, mounts, radiation) is far
+// above their measurement error. The spread s that makes sum h_i e_i^2 / (sigma_i^2 + s^2) equal
+// to the (Huber-weighted) degrees of freedom, a random-effects estimate, is added to every
+// partial's variance, so that a few very clean partials do not decide the curve alone; s is at
+// least 2 %.
+double model_spread(const std::vector<double>& e2, const std::vector<double>& rel,
+                    const std::vector<double>& huber, std::size_t parameters) {
+  double n = 0;
+  for (double h : huber) n += h;
+  const double dof = n - double(parameters);
+  if (dof <= 0) return 0.02;
+  auto chi2 = [&](double s) {
+    double sum = 0;
+    for (std::size_t i = 0; i < e2.size(); ++i) sum += huber[i] * e2[i] / (rel[i] * rel[i] + s * s);
+    return sum;
+  };
+  double lo = 0.02, hi = 10;
+  if (chi2(lo) <= dof) return lo;
+  for (int it = 0; it < 60; ++it) {
+    const double mid = std::sqrt(lo * hi);
+    (chi2(mid) > dof ? lo : hi) = mid;
+  }
+  return hi;
+}
+
+}  // namespace
+
 DampingFit fit_damping(const std::vector<Feature>& features, const DampingModel& shape) {
   std::vector<Point> pts;
+  std::vector<double> rel;
   for (const Feature& f : features) {
     if (!(f.decay > 0) || !(f.frequency > 0)) continue;
     const double w = 2 * std::numbers::pi * f.frequency;
-    const double rel = f.decay_sigma / f.decay;
-    pts.push_back({w * w, 2 * f.decay, 1.0 / (rel * rel + 0.02 * 0.02)});
+    rel.push_back(f.decay_sigma / f.decay);
+    pts.push_back({w * w, 2 * f.decay, 0.0, 2 * f.decay});
   }
   const std::size_t need = shape.kind == Kind::Hybrid ? 4 : shape.alpha.size();
   if (pts.size() < need)
@@ -155,29 +201,41 @@ DampingFit fit_damping(const std::vector<Feature>& features, const DampingModel&
                      " parameters");
   DampingFit fit;
   fit.partials = pts.size();
-  switch (shape.kind) {
-    case Kind::Rayleigh:
-      fit.model = {Kind::Rayleigh, linear_fit(pts, powers(pts, 2), true)};
-      break;
-    case Kind::Caughey:
-      fit.model = {Kind::Caughey, linear_fit(pts, powers(pts, shape.alpha.size()), false)};
-      break;
-    case Kind::PowerLaw:
-      fit.model = fit_power(pts);
-      break;
-    case Kind::Hybrid:
-      fit.model = fit_hybrid(pts);
-      break;
+  // Iteratively reweighted: a partial more than 2.5 deviations off the curve (a decay spoilt by
+  // a beat, or a mode of another kind) is weighted down as Huber's loss does, and the spread is
+  // estimated again from the others.
+  double spread = 0.02;
+  std::vector<double> huber(pts.size(), 1.0), e2(pts.size());
+  for (int round = 0; round < 6; ++round) {
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      pts[i].weight = huber[i] / (rel[i] * rel[i] + spread * spread);
+    fit.model = fit_model(pts, shape);
+    try {
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const double beta = fit.model.coefficient(std::sqrt(pts[i].x));
+        const double e = std::log(std::max(beta, 1e-300) / pts[i].c);
+        e2[i] = e * e;
+        // Dividing by the last beta makes the next linear fit a Gauss-Newton step on ln(beta/c).
+        pts[i].scale = std::max(beta, 1e-3 * pts[i].c);
+        const double z = std::sqrt(e2[i] / (rel[i] * rel[i] + spread * spread));
+        huber[i] = z > 2.5 ? 2.5 / z : 1.0;
+      }
+    } catch (const InputError&) {
+      break;  // a curve negative at some partial: keep it, the check below says so
+    }
+    const double next = model_spread(e2, rel, huber, need);
+    if (round > 0 && std::abs(next - spread) < 0.01 * spread) break;
+    spread = next;
   }
+  fit.spread = spread;
   // A Caughey series fitted freely may turn negative between or beyond the partials.
   double lo = INFINITY, hi = 0;
   for (const Point& p : pts) lo = std::min(lo, p.x), hi = std::max(hi, p.x);
   for (int i = 0; i <= 64; ++i) {
     const double x = lo * std::pow(hi / lo, i / 64.0);
-    DampingModel m = fit.model;
     double c = 0, xp = 1;
-    for (double a : m.alpha) c += a * xp, xp *= x;
-    if (m.kind == Kind::Caughey && c < 0) {
+    for (double a : fit.model.alpha) c += a * xp, xp *= x;
+    if (fit.model.kind == Kind::Caughey && c < 0) {
       fit.warnings.push_back("the fitted Caughey series is negative near " +
                              std::to_string(std::sqrt(x) / (2 * std::numbers::pi)) +
                              " Hz; try fewer terms or another model");

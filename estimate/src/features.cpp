@@ -44,7 +44,7 @@ struct LongSpectrum {
 class LongTransform {
  public:
   LongTransform(std::size_t L) : L_(L) {
-    while (n_ < 2 * L) n_ <<= 1;
+    while (n_ < L) n_ <<= 1;  // bins finer than fs / L: the fit refines the frequency
     in_.assign(n_, 0.0);
     out_.resize(n_ / 2 + 1);
     window_.resize(L);
@@ -64,7 +64,7 @@ class LongTransform {
     for (std::size_t i = 0; i < L_; ++i) in_[i] = r[i] * window_[i];
     fftw_execute(plan_);
     s.mag.resize(n_ / 2 + 1);
-    for (std::size_t k = 0; k < s.mag.size(); ++k) s.mag[k] = std::abs(out_[k]);
+    for (std::size_t k = 0; k < s.mag.size(); ++k) s.mag[k] = std::sqrt(std::norm(out_[k]));
     s.bin_hz = fs / double(n_);
     s.resolution_hz = fs / double(L_);
     s.window_power = power_;

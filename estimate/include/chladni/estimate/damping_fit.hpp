@@ -1,8 +1,11 @@
 #pragma once
 // The damping curve c = beta(omega^2) fitted to the features' c_j = 2 d_j (Sterling & Lin 2016,
-// Eq. 1.2-1.4): weighted least squares on the relative error beta(omega_j^2) / c_j - 1, each
-// partial weighted by the inverse variance of its decay plus a 2 % floor, so a few very clean
-// partials cannot pull the curve alone.
+// Eq. 1.2-1.4): weighted least squares on the logarithmic error ln(beta(omega_j^2) / c_j) (decay
+// rates span decades; a curve below the data is as wrong as one above it by the same factor),
+// solved exactly where the model is linear by Gauss-Newton steps. Each partial is weighted by
+// the inverse of its decay's variance plus the partials' scatter about the curve (estimated from
+// the fit itself, at least 2 %), and down as Huber's loss does when far off, so neither a few
+// very clean partials nor one spoilt one decide the curve.
 #include <string>
 #include <vector>
 
@@ -13,8 +16,10 @@ namespace chladni::estimate {
 
 struct DampingFit {
   DampingModel model;
-  double rms_relative_error = 0;  ///< weighted rms of beta / c - 1 over the partials
+  double rms_relative_error = 0;  ///< weighted rms of ln(beta / c) over the partials
   std::size_t partials = 0;       ///< partials used
+  double spread = 0;              ///< relative scatter of the partials about the curve, beyond
+                                  ///< their measurement error (added to each one's variance)
   std::vector<std::string> warnings;
 };
 
