@@ -79,6 +79,21 @@ TEST(CliEstimate, RecoversTheBanksMaterialAndSavesItAsAPreset) {
   EXPECT_EQ(nlohmann::json::parse(r.output)["material"]["name"], "my-bar");
 }
 
+TEST(CliEstimate, SolvesAMeshForItsModesFirst) {
+  const StruckBar& bar = struck_bar();
+  const std::string json = temp_path("est_cli_mesh.json");
+  const auto r = run_cli("estimate " + bar.wav +
+                         " --mesh " CHLADNI_SOURCE_DIR
+                         "/meshes/bar.obj --mesh-modes 14 --material steel:constant "
+                         "--hit-point 0.05,0.004,0.005 --listener 0.05,0,1 --json " +
+                         json);
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("solving the modes of"), std::string::npos) << r.output;
+  const auto j = nlohmann::json::parse(std::ifstream(json));
+  EXPECT_EQ(j["object"]["modes"].get<int>(), 14);
+  EXPECT_NEAR(j["material"]["E_pa"].get<double>(), 200e9, 0.01 * 200e9);
+}
+
 TEST(CliEstimate, BadInputExitsWith2AndNamesIt) {
   const StruckBar& bar = struck_bar();
   const std::string dir = temp_path("");
