@@ -7,6 +7,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <optional>
 
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
@@ -20,6 +21,7 @@
 #include "chladni/estimate/struck_modes.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "commands.hpp"
+#include "estimate_plot.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -27,7 +29,7 @@ namespace {
 struct EstimateArgs {
   std::vector<std::string> recordings;
   std::string damping = "power", json_path, resynth, bank, mesh, listener, material, save_material,
-              hit_point;
+              hit_point, plot;
   double start = 0, end = 0, explained = 0.9, min_freq = 20, max_freq = 0, rho = 0, nu = 0;
   std::size_t max_features = 64, hit_vertex = 0, starts = 4, mesh_modes = 60;
   bool quiet = false, hit_given = false;
@@ -169,6 +171,7 @@ void check_args(const EstimateArgs& a) {
         "take one recording");
   if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
   if (!a.resynth.empty()) check_output_path(a.resynth, "--resynth");
+  if (!a.plot.empty()) check_output_path(a.plot, "--plot");
   if (!a.save_material.empty()) check_material_name(a.save_material);
 }
 
@@ -218,9 +221,9 @@ nlohmann::json recording_json(const Analysed& an, const EstimateArgs& a) {
 }
 
 // The material of the struck object; fills j["object"], j["material"] and the resynthesis.
-void fit_object(const EstimateArgs& a, const estimate::Recording& rec,
-                const estimate::FeatureSet& set, const estimate::DampingFit& curve,
-                nlohmann::json& j, std::vector<estimate::Feature>& sound) {
+DampingModel fit_object(const EstimateArgs& a, const estimate::Recording& rec,
+                        const estimate::FeatureSet& set, const estimate::DampingFit& curve,
+                        nlohmann::json& j, std::vector<estimate::Feature>& sound) {
   const StruckObject obj = load_object(a);
   const std::size_t hit = hit_of(obj, a);
   const estimate::StruckModes modes =
@@ -262,6 +265,7 @@ void fit_object(const EstimateArgs& a, const estimate::Recording& rec,
     if (!a.quiet)
       std::printf("saved material '%s' to %s\n", m.name.c_str(), user_materials_path().c_str());
   }
+  return fit.damping;
 }
 
 void run_estimate(const EstimateArgs& a) {
@@ -282,14 +286,33 @@ void run_estimate(const EstimateArgs& a) {
   nlohmann::json j;
   const Analysed& first = all.front();
   std::vector<estimate::Feature> sound = first.set.features;
-  if (!a.bank.empty() || !a.mesh.empty()) fit_object(a, first.rec, first.set, curve, j, sound);
+  std::optional<DampingModel> material;
+  if (!a.bank.empty() || !a.mesh.empty())
+    material = fit_object(a, first.rec, first.set, curve, j, sound);
+  std::vector<double> resynthesized;
+  if (!a.resynth.empty() || !a.plot.empty())
+    resynthesized = estimate::synthesize(sound, first.rec.sample_rate, first.set.residual.size());
   if (!a.resynth.empty()) {
     AudioBuffer out;
     out.sample_rate = int(std::lround(first.rec.sample_rate));
-    const auto y = estimate::synthesize(sound, first.rec.sample_rate, first.set.residual.size());
-    out.samples.assign(y.begin(), y.end());
+    out.samples.assign(resynthesized.begin(), resynthesized.end());
     write_wav(a.resynth, out);
     if (!a.quiet) std::printf("wrote %s\n", a.resynth.c_str());
+  }
+  if (!a.plot.empty()) {
+    EstimatePlot p;
+    p.path = a.plot;
+    p.title = first.rec.origin + (all.size() > 1 ? " and others" : "") + ": " +
+              std::to_string(pooled.size()) + " partials, " + a.damping + " damping" +
+              (material ? ", fitted on " + (a.bank.empty() ? a.mesh : a.bank) : "");
+    p.recording = &first.rec;
+    p.features = &first.set;
+    p.resynthesized = std::move(resynthesized);
+    for (const Analysed& an : all) p.pooled.push_back(&an.set);
+    p.curve = curve.model;
+    p.material = material ? &*material : nullptr;
+    write_estimate_plot(p);
+    if (!a.quiet) std::printf("wrote %s\n", a.plot.c_str());
   }
   if (!a.json_path.empty()) {
     for (const Analysed& an : all) j["recordings"].push_back(recording_json(an, a));
@@ -352,6 +375,9 @@ void add_estimate(CLI::App& app) {
                   "Save the fitted material under this name (chladni precompute --material NAME)");
   cmd->add_option("--json", a->json_path, "Write the partials and the fit as JSON");
   cmd->add_option("--resynth", a->resynth, "Write the resynthesized strike as WAV");
+  cmd->add_option("--plot", a->plot,
+                  "Write the recorded and resynthesized spectrograms and the damping curves as "
+                  "PNG");
   cmd->add_flag("-q,--quiet", a->quiet, "Print nothing but errors");
   cmd->callback([a] { run_estimate(*a); });
 }

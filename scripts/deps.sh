@@ -12,7 +12,7 @@ PACKAGES=(
   libeigen3-dev nlohmann-json3-dev libcli11-dev libsndfile1-dev
   libxxhash-dev openmpi-bin libopenmpi-dev
   libgtest-dev libgmock-dev libbenchmark-dev libstk-dev
-  zlib1g-dev libfftw3-dev libkissfft-dev libnlopt-dev libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
+  zlib1g-dev libfftw3-dev libkissfft-dev libnlopt-dev libcairo2-dev fonts-dejavu-core libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
   libhmat-oss-dev
   librtaudio-dev libjack-jackd2-dev jackd2 libbullet-dev
   clang-format clang libclang-rt-14-dev llvm
