@@ -1,5 +1,6 @@
 // The validity checks on good and broken meshes, repair and tetrahedralization.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -36,8 +37,11 @@ std::string cube_obj() {
   return s;
 }
 
+// One file per test process: ctest runs these tests in parallel, and one writing the file while
+// another reads it gave "holds no faces".
 SurfaceMesh cube() {
-  return read_mesh(chladni::test::write_temp("chladni_cube.obj", cube_obj()));
+  return read_mesh(
+      chladni::test::write_temp("chladni_cube_" + std::to_string(::getpid()) + ".obj", cube_obj()));
 }
 
 std::string message_of(const SurfaceMesh& m) {
