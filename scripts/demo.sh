@@ -32,6 +32,11 @@ $chladni paper meshes/paper/crumple.json -o out/paper_crumple.wav --paper-mode b
 $chladni shake tambourine -o out/tambourine.wav --duration 3 --shakes-per-second 5 --backend gpu \
   --normalize -1
 $chladni render examples/gravel_in_bowl.json -o out/gravel_in_bowl.wav --normalize -1
+# Estimation: a recorded glockenspiel note's partials and the damping curve through them (the
+# steel preset's), its resynthesis, and the spectrograms with the curve.
+$chladni estimate recordings/glockenspiel_C6.wav --end 0.798 --json out/glockenspiel.json \
+  --resynth out/glockenspiel_resynth.wav --plot out/glockenspiel.png
 echo "demo: wrote out/bowl_and_bar.wav, out/bowl_and_bar_gpu.wav, out/struck_bar.wav," \
   "out/paper_slide.wav, out/paper_crumple.wav (spectrograms beside them)," \
-  "out/tambourine.wav and out/gravel_in_bowl.wav"
+  "out/tambourine.wav, out/gravel_in_bowl.wav and out/glockenspiel_resynth.wav (with" \
+  "out/glockenspiel.png)"
