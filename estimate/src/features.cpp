@@ -6,6 +6,7 @@
 #include <cmath>
 #include <complex>
 #include <numbers>
+#include <optional>
 #include <thread>
 
 #include "chladni/core/error.hpp"
@@ -155,6 +156,47 @@ double energy(const std::vector<double>& v) {
   return e;
 }
 
+// The round's candidates, fitted on all threads against the same residual (unset: no fit).
+std::vector<std::optional<Feature>> fit_all(runtime::ThreadPool& pool,
+                                            const std::vector<Candidate>& peaks,
+                                            const std::vector<double>& r, double fs,
+                                            const HannWindows& windows) {
+  struct Job {
+    const std::vector<Candidate>* peaks;
+    const std::vector<double>* r;
+    const HannWindows* windows;
+    double fs;
+    std::vector<std::optional<Feature>> fits;
+  } job{&peaks, &r, &windows, fs, std::vector<std::optional<Feature>>(peaks.size())};
+  pool.run(
+      [](void* ctx, int i) {
+        auto& j = *static_cast<Job*>(ctx);
+        const Candidate& c = (*j.peaks)[std::size_t(i)];
+        Feature f;
+        if (fit_partial(*j.r, j.fs, c.frequency, c.noise_sigma, *j.windows, f))
+          j.fits[std::size_t(i)] = f;
+      },
+      &job, int(peaks.size()));
+  return std::move(job.fits);
+}
+
+// The residual and its energy; a partial is taken when subtracting it lowers that energy.
+struct Residual {
+  std::vector<double> r, trial;
+  double total = 0, left = 0;
+
+  bool take(Feature& f, double fs) {
+    trial.assign(r.begin(), r.end());  // reuses its storage: no page faults per candidate
+    subtract_partial(trial, fs, f);
+    const double after = energy(trial);
+    if (!(after < left)) return false;  // the fit did not describe what is there
+    f.energy_share = (left - after) / total;
+    std::swap(r, trial);
+    left = after;
+    return true;
+  }
+};
+
 }  // namespace
 
 double Feature::damping_ratio() const {
@@ -172,82 +214,49 @@ FeatureSet extract_features(std::span<const double> x, double fs, const FeatureO
   set.sample_rate = fs;
   if (x.empty()) return set;
   set.origin = peak_index(x);
-  std::vector<double> r(x.begin() + long(set.origin), x.end());
-  set.duration = double(r.size()) / fs;
-  const double total = energy(r);
-  if (!(total > 0)) {
-    set.residual = std::move(r);
+  Residual res;
+  res.r.assign(x.begin() + long(set.origin), x.end());
+  set.duration = double(res.r.size()) / fs;
+  res.total = res.left = energy(res.r);
+  if (!(res.total > 0)) {
+    set.residual = std::move(res.r);
     return set;
   }
   // Long enough to separate partials a few Hz apart, short enough to stay on the sound.
-  const std::size_t L = std::min(r.size(), std::size_t(std::lround(4.0 * fs)));
+  const std::size_t L = std::min(res.r.size(), std::size_t(std::lround(4.0 * fs)));
   LongTransform transform(L);
   LongSpectrum s;
   const HannWindows windows(fs);
   runtime::ThreadPool pool(o.threads > 0 ? o.threads
                                          : int(std::max(1u, std::thread::hardware_concurrency())));
   std::vector<Zone> excluded;
-  std::vector<double> trial;
   const double tried_zone = 3 * fs / double(L);
-  int idle_rounds = 0;
   auto own_zone = [&](const Feature& g) { return std::max(tried_zone, 2 * fs / double(g.window)); };
-  double left = total;
   auto done = [&] {
     return set.features.size() >= o.max_features ||
-           (1 - left / total >= o.explained && set.features.size() >= o.min_features);
+           (1 - res.left / res.total >= o.explained && set.features.size() >= o.min_features);
   };
-  for (std::size_t round = 0; round < 4 * o.max_features; ++round) {
-    if (done()) break;
-    transform.of(r, fs, s);
+  int idle_rounds = 0;
+  for (std::size_t round = 0; round < 4 * o.max_features && !done(); ++round) {
+    transform.of(res.r, fs, s);
     const auto peaks = pick_peaks(s, o.min_frequency, fmax, o.min_snr_db, excluded, 8);
     if (peaks.empty() || idle_rounds >= 3) break;
     const std::size_t before = set.features.size();
-    // The round's candidates are fitted on all threads against the same residual, then taken
-    // one by one in order of clarity.
-    struct Job {
-      const std::vector<double>* r;
-      const std::vector<Candidate>* peaks;
-      const HannWindows* windows;
-      double fs;
-      std::vector<Feature> fits;
-      std::vector<char> ok;
-    } job{&r,
-          &peaks,
-          &windows,
-          fs,
-          std::vector<Feature>(peaks.size()),
-          std::vector<char>(peaks.size(), 0)};
-    pool.run(
-        [](void* ctx, int i) {
-          auto& j = *static_cast<Job*>(ctx);
-          const Candidate& c = (*j.peaks)[std::size_t(i)];
-          j.ok[std::size_t(i)] = fit_partial(*j.r, j.fs, c.frequency, c.noise_sigma, *j.windows,
-                                             j.fits[std::size_t(i)]);
-        },
-        &job, int(peaks.size()));
-    for (std::size_t i = 0; i < peaks.size(); ++i) {
-      const Candidate& c = peaks[i];
-      excluded.push_back({c.frequency, tried_zone});
-      if (done()) break;
-      if (!job.ok[i]) continue;
-      Feature f = job.fits[i];
+    auto fits = fit_all(pool, peaks, res.r, fs, windows);
+    for (std::size_t i = 0; i < peaks.size() && !done(); ++i) {
+      excluded.push_back({peaks[i].frequency, tried_zone});
+      if (!fits[i]) continue;
+      Feature& f = *fits[i];
       // A fit within two bins (of its own frame) of a partial already taken is what that
       // partial's subtraction left, not a new one; a decay less certain than itself is noise.
-      if (std::any_of(set.features.begin(), set.features.end(),
-                      [&](const Feature& g) {
-                        return std::abs(g.frequency - f.frequency) < own_zone(g);
-                      }) ||
-          f.decay_sigma > f.decay + 0.5) {
+      const bool taken = std::any_of(set.features.begin(), set.features.end(), [&](const auto& g) {
+        return std::abs(g.frequency - f.frequency) < own_zone(g);
+      });
+      if (taken || f.decay_sigma > f.decay + 0.5) {
         excluded.push_back({f.frequency, tried_zone});
         continue;
       }
-      trial.assign(r.begin(), r.end());  // reuses its storage: no page faults per candidate
-      subtract_partial(trial, fs, f);
-      const double after = energy(trial);
-      if (!(after < left)) continue;  // the fit did not describe what is there
-      f.energy_share = (left - after) / total;
-      std::swap(r, trial);
-      left = after;
+      if (!res.take(f, fs)) continue;
       set.features.push_back(f);
       excluded.push_back({f.frequency, own_zone(f)});
     }
@@ -256,8 +265,8 @@ FeatureSet extract_features(std::span<const double> x, double fs, const FeatureO
   }
   std::sort(set.features.begin(), set.features.end(),
             [](const Feature& a, const Feature& b) { return a.frequency < b.frequency; });
-  set.explained = 1 - left / total;
-  set.residual = std::move(r);
+  set.explained = 1 - res.left / res.total;
+  set.residual = std::move(res.r);
   return set;
 }
 

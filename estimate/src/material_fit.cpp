@@ -180,19 +180,11 @@ std::vector<Partial> model_partials(const StruckModes& modes, double frequency_s
   return out;
 }
 
-MaterialFit fit_material(const FeatureSet& features, const PsychoSpectrogram& target,
-                         const StruckModes& modes, const DampingFit& damping_start,
-                         const MaterialFitOptions& o) {
-  if (modes.omega.empty() || modes.omega.size() != modes.amplitude.size())
-    throw InputError("material fit: the object has no modes");
-  if (features.features.empty()) throw InputError("material fit: the recording has no partials");
-  Problem p{&features, &target, &modes, coordinates(o.shape, features), {}, 0, 0};
-  p.max_frequency = o.max_frequency > 0 ? o.max_frequency : 0.45 * features.sample_rate;
-  for (const Feature& f : features.features)
-    p.extracted.push_back({f.frequency, f.decay, f.amplitude});
-  const std::size_t dims = kCurve + p.curve.count();
+namespace {
 
-  // Damping start: the curve through the features, read at the reference frequencies.
+// Damping start: the curve through the features, read at the reference frequencies.
+std::vector<double> curve_start(const Problem& p, const DampingFit& damping_start,
+                                const DampingModel& shape) {
   std::vector<double> curve0(p.curve.count());
   for (std::size_t k = 0; k < p.curve.values(); ++k) {
     double c = 0;
@@ -202,18 +194,27 @@ MaterialFit fit_material(const FeatureSet& features, const PsychoSpectrogram& ta
     }
     curve0[k] = std::log(std::max(c, 1e-3));
   }
-  if (o.shape.kind == Kind::Hybrid)
+  if (shape.kind == Kind::Hybrid)
     curve0[3] = damping_start.model.kind == Kind::Hybrid ? damping_start.model.alpha[3] : 0.5;
+  return curve0;
+}
 
-  // Starting points: each of the three most energetic partials taken as each candidate mode
-  // (Sec. 1.3.1.2), the scale matching their amplitudes, for a hard, a medium and a soft strike.
+struct Start {
+  std::vector<double> theta;
+  double cost;
+};
+
+// Starting points, best first: each of the three most energetic partials taken as each
+// candidate mode (Sec. 1.3.1.2), the scale matching their amplitudes, for a hard, a medium and a
+// soft strike. Candidate modes are the 40 lowest that a strike at this point excites at all (the
+// mallet's softness, still unknown, decides which of them are loudest).
+std::vector<Start> starting_points(const FeatureSet& features, const StruckModes& modes, Problem& p,
+                                   const std::vector<double>& curve0) {
   std::vector<const Feature*> dominant;
   for (const Feature& f : features.features) dominant.push_back(&f);
   std::sort(dominant.begin(), dominant.end(),
             [](const Feature* a, const Feature* b) { return a->energy_share > b->energy_share; });
   dominant.resize(std::min<std::size_t>(dominant.size(), 3));
-  // Candidate modes: the 40 lowest that a strike at this point excites at all (the mallet's
-  // softness, still unknown, decides which of them are loudest).
   double loudest = 0;
   for (double a : modes.amplitude) loudest = std::max(loudest, a);
   std::vector<std::size_t> order(modes.omega.size()), loud;
@@ -222,19 +223,14 @@ MaterialFit fit_material(const FeatureSet& features, const PsychoSpectrogram& ta
             [&](std::size_t a, std::size_t b) { return modes.omega[a] < modes.omega[b]; });
   for (std::size_t i : order)
     if (loud.size() < 40 && modes.amplitude[i] > 1e-3 * loudest) loud.push_back(i);
-  struct Start {
-    std::vector<double> theta;
-    double cost;
-  };
   std::vector<Start> starts;
   for (const Feature* f : dominant)
     for (std::size_t i : loud)
       for (double tau : {2e-5, 2e-4, 2e-3}) {
-        if (!(modes.amplitude[i] > 0)) continue;
-        std::vector<double> theta(dims);
-        theta[0] = std::log(kTwoPi * f->frequency / modes.omega[i]);
+        std::vector<double> theta(kCurve + curve0.size());
         const double w = kTwoPi * f->frequency;
         const double contact = std::abs(runtime::contact_weight(1.0, tau, w, f->decay));
+        theta[0] = std::log(w / modes.omega[i]);
         theta[1] = std::log(f->amplitude / (modes.amplitude[i] * std::max(contact, 1e-9)));
         theta[2] = std::log(tau);
         std::copy(curve0.begin(), curve0.end(), theta.begin() + kCurve);
@@ -243,10 +239,60 @@ MaterialFit fit_material(const FeatureSet& features, const PsychoSpectrogram& ta
       }
   std::sort(starts.begin(), starts.end(),
             [](const Start& a, const Start& b) { return a.cost < b.cost; });
+  return starts;
+}
+
+// BOBYQA from `s`: the frequency scale within +-0.2 (in its log) of the start, so that starts
+// explore different mode-to-partial mappings; the rest within wide bounds.
+Start local_search(Problem& p, const Start& s, const MaterialFitOptions& o) {
+  const std::size_t dims = s.theta.size();
+  nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, unsigned(dims));
+  if (!opt) throw InternalError("material fit: NLopt could not make its optimizer");
+  std::vector<double> lb(dims), ub(dims), step(dims), theta = s.theta;
+  lb[0] = theta[0] - 0.2, ub[0] = theta[0] + 0.2, step[0] = 0.01;
+  lb[1] = theta[1] - 6, ub[1] = theta[1] + 6, step[1] = 0.3;
+  lb[2] = std::log(1e-6), ub[2] = std::log(0.02), step[2] = 0.5;
+  for (std::size_t k = kCurve; k < dims; ++k)
+    lb[k] = theta[k] - 6, ub[k] = theta[k] + 6, step[k] = 0.3;
+  if (o.shape.kind == Kind::Hybrid)
+    lb[kCurve + 3] = 0.01, ub[kCurve + 3] = 1.5, step[kCurve + 3] = 0.1;
+  for (std::size_t k = 0; k < dims; ++k) theta[k] = std::clamp(theta[k], lb[k], ub[k]);
+  nlopt_set_lower_bounds(opt, lb.data());
+  nlopt_set_upper_bounds(opt, ub.data());
+  nlopt_set_initial_step(opt, step.data());
+  nlopt_set_min_objective(opt, nlopt_cost, &p);
+  nlopt_set_xtol_rel(opt, 1e-6);
+  nlopt_set_ftol_rel(opt, 1e-7);
+  nlopt_set_maxeval(opt, int(o.evaluations));
+  double value = s.cost;
+  // A failed or round-off-limited search still leaves its best point in theta.
+  nlopt_optimize(opt, theta.data(), &value);
+  nlopt_destroy(opt);
+  return {theta, value};
+}
+
+}  // namespace
+
+MaterialFit fit_material(const FeatureSet& features, const PsychoSpectrogram& target,
+                         const StruckModes& modes, const DampingFit& damping_start,
+                         const MaterialFitOptions& o) {
+  if (modes.omega.empty() || modes.omega.size() != modes.amplitude.size())
+    throw InputError("material fit: the object has no modes");
+  for (std::size_t i = 0; i < modes.omega.size(); ++i)
+    if (!(modes.omega[i] > 0) || !(modes.amplitude[i] >= 0) || !std::isfinite(modes.amplitude[i]))
+      throw InputError("material fit: mode " + std::to_string(i) +
+                       " has no valid frequency or "
+                       "amplitude");
+  if (features.features.empty()) throw InputError("material fit: the recording has no partials");
+  Problem p{&features, &target, &modes, coordinates(o.shape, features), {}, 0, 0};
+  p.max_frequency = o.max_frequency > 0 ? o.max_frequency : 0.45 * features.sample_rate;
+  for (const Feature& f : features.features)
+    p.extracted.push_back({f.frequency, f.decay, f.amplitude});
+  const std::vector<Start> starts =
+      starting_points(features, modes, p, curve_start(p, damping_start, o.shape));
 
   MaterialFit best;
-  double best_cost = INFINITY;
-  std::vector<double> best_theta;
+  Start found{{}, INFINITY};
   std::vector<double> used_scales;
   for (const Start& s : starts) {
     if (best.starts_tried >= o.starts) break;
@@ -256,30 +302,11 @@ MaterialFit fit_material(const FeatureSet& features, const PsychoSpectrogram& ta
       continue;
     used_scales.push_back(s.theta[0]);
     ++best.starts_tried;
-    nlopt_opt opt = nlopt_create(NLOPT_LN_BOBYQA, unsigned(dims));
-    std::vector<double> lb(dims), ub(dims), step(dims), theta = s.theta;
-    lb[0] = theta[0] - 0.2, ub[0] = theta[0] + 0.2, step[0] = 0.01;
-    lb[1] = theta[1] - 6, ub[1] = theta[1] + 6, step[1] = 0.3;
-    lb[2] = std::log(1e-6), ub[2] = std::log(0.02), step[2] = 0.5;
-    for (std::size_t k = kCurve; k < dims; ++k)
-      lb[k] = theta[k] - 6, ub[k] = theta[k] + 6, step[k] = 0.3;
-    if (o.shape.kind == Kind::Hybrid)
-      lb[kCurve + 3] = 0.01, ub[kCurve + 3] = 1.5, step[kCurve + 3] = 0.1;
-    nlopt_set_lower_bounds(opt, lb.data());
-    nlopt_set_upper_bounds(opt, ub.data());
-    nlopt_set_initial_step(opt, step.data());
-    nlopt_set_min_objective(opt, nlopt_cost, &p);
-    nlopt_set_xtol_rel(opt, 1e-6);
-    nlopt_set_ftol_rel(opt, 1e-7);
-    nlopt_set_maxeval(opt, int(o.evaluations));
-    double value = s.cost;
-    nlopt_optimize(opt, theta.data(), &value);
-    nlopt_destroy(opt);
-    if (value < best_cost) best_cost = value, best_theta = theta;
+    if (Start r = local_search(p, s, o); r.cost < found.cost) found = std::move(r);
   }
-  if (best_theta.empty()) throw InputError("material fit: no starting point gives a valid model");
+  if (found.theta.empty()) throw InputError("material fit: no starting point gives a valid model");
   const std::size_t tried = best.starts_tried;
-  p.cost(best_theta.data(), &best);
+  p.cost(found.theta.data(), &best);
   best.starts_tried = tried;
   best.evaluations = p.evaluations;
   best.gamma = modes.gamma * best.frequency_scale * best.frequency_scale;
