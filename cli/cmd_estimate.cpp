@@ -91,22 +91,14 @@ StruckObject load_object(const EstimateArgs& a) {
   return o;
 }
 
-Vec3 parse_point(const std::string& text, const char* what) {
-  Vec3 v{};
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 || !is_finite(v))
-    throw InputError(std::string(what) + " must be X,Y,Z in metres, got '" + text + "'");
-  return v;
-}
-
 // The struck surface point: --hit-vertex, or the one nearest --hit-point.
 std::size_t hit_of(const StruckObject& o, const EstimateArgs& a) {
-  if (!a.hit_point.empty()) return o.model.nearest_point(parse_point(a.hit_point, "--hit-point"));
+  if (!a.hit_point.empty()) return o.model.nearest_point(parse_vec3(a.hit_point, "--hit-point"));
   return a.hit_vertex;
 }
 
 Vec3 listener_for(const StruckObject& o, std::size_t hit, const EstimateArgs& a) {
-  if (!a.listener.empty()) return parse_point(a.listener, "--listener");
+  if (!a.listener.empty()) return parse_vec3(a.listener, "--listener");
   // A metre out along the struck point's normal.
   const std::size_t p = std::min(hit, o.model.points.size() - 1);
   return add(o.model.points[p], o.model.normals[p]);
@@ -221,16 +213,17 @@ nlohmann::json recording_json(const Analysed& an, const EstimateArgs& a) {
 }
 
 // The material of the struck object; fills j["object"], j["material"] and the resynthesis.
-DampingModel fit_object(const EstimateArgs& a, const estimate::Recording& rec,
-                        const estimate::FeatureSet& set, const estimate::DampingFit& curve,
-                        nlohmann::json& j, std::vector<estimate::Feature>& sound) {
+DampingModel fit_object(const EstimateArgs& a, const DampingModel& shape,
+                        const estimate::Recording& rec, const estimate::FeatureSet& set,
+                        const estimate::DampingFit& curve, nlohmann::json& j,
+                        std::vector<estimate::Feature>& sound) {
   const StruckObject obj = load_object(a);
   const std::size_t hit = hit_of(obj, a);
   const estimate::StruckModes modes =
       estimate::struck_modes(obj.model, hit, listener_for(obj, hit, a),
                              obj.material.youngs_modulus / obj.material.density);
   estimate::MaterialFitOptions mo;
-  mo.shape = estimate::damping_kind(a.damping);
+  mo.shape = shape;
   mo.starts = a.starts;
   mo.max_frequency = a.max_freq;
   const auto t0 = std::chrono::steady_clock::now();
@@ -288,7 +281,7 @@ void run_estimate(const EstimateArgs& a) {
   std::vector<estimate::Feature> sound = first.set.features;
   std::optional<DampingModel> material;
   if (!a.bank.empty() || !a.mesh.empty())
-    material = fit_object(a, first.rec, first.set, curve, j, sound);
+    material = fit_object(a, shape, first.rec, first.set, curve, j, sound);
   std::vector<double> resynthesized;
   if (!a.resynth.empty() || !a.plot.empty())
     resynthesized = estimate::synthesize(sound, first.rec.sample_rate, first.set.residual.size());

@@ -33,14 +33,6 @@ struct ShakeArgs {
   bool list = false, quiet = false;
 };
 
-Vec3 parse_vec3(const std::string& s, const char* what) {
-  Vec3 v{};
-  char tail = 0;
-  if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 || !is_finite(v))
-    throw InputError(std::string(what) + " must be X,Y,Z in metres, got '" + s + "'");
-  return v;
-}
-
 void list_instruments() {
   std::printf("%-12s %-9s %-5s %s\n", "instrument", "particles", "res", "what (source)");
   for (const runtime::PhisemPreset& p : runtime::phisem_presets())

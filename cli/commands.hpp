@@ -1,7 +1,11 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <cmath>
+#include <cstdio>
 #include <string>
+
+#include "chladni/core/error.hpp"
+#include "chladni/core/vec3.hpp"
 
 namespace chladni::cli {
 
@@ -42,6 +46,15 @@ inline CLI::Validator finite_above(double lo, double hi) {
 /// Worker threads: 0 (all cores) up to 1024.
 inline CLI::Validator thread_count() {
   return CLI::Range(0, 1024);
+}
+
+/// An "X,Y,Z" option in metres (`what` names it): three finite numbers, nothing after them.
+inline Vec3 parse_vec3(const std::string& s, const char* what) {
+  Vec3 v{};
+  char tail = 0;
+  if (std::sscanf(s.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3 || !is_finite(v))
+    throw InputError(std::string(what) + " must be X,Y,Z in metres, got '" + s + "'");
+  return v;
 }
 
 /// Thrown by a command that ends with a non-zero exit code it has already explained.

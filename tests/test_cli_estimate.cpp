@@ -3,7 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <png.h>
-#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -24,16 +23,13 @@ constexpr double kTwoPi = 6.283185307179586;
 // The bar (steel:constant, power:3e-4,0.5) struck on its top face, heard 1 m above: a bank
 // made once.
 struct StruckBar {
-  // Per process: ctest runs these tests side by side, and each makes the bar.
-  const std::string tag = std::to_string(::getpid());
-  std::string bank = temp_path("est_cli_bar_" + tag + ".chbank"),
-              wav = temp_path("est_cli_bar_" + tag + ".wav");
+  std::string bank = temp_path("est_cli_bar.chbank"), wav = temp_path("est_cli_bar.wav");
   StruckBar() {
     auto r = run_cli("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " + bank +
                      " --max-modes 14 --no-transfer --material steel:constant --quiet");
     EXPECT_EQ(r.code, 0) << r.output;
     const std::string scene =
-        chladni::test::write_temp("est_cli_scene_" + tag + ".json",
+        chladni::test::write_temp("est_cli_scene.json",
                                   R"({"sample_rate": 44100, "channels": 1, "duration": 2.5,
             "listener": {"position": [0.05, 0, 1], "forward": [0, 1, 0], "up": [0, 0, 1]},
             "objects": [{"name": "bar", "soundbank": ")" +

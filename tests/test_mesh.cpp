@@ -1,6 +1,5 @@
 // The validity checks on good and broken meshes, repair and tetrahedralization.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>

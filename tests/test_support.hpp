@@ -2,6 +2,7 @@
 // Shared helpers: GPU availability (tests skip without a Vulkan device unless
 // CHLADNI_REQUIRE_GPU=1, which the CI sets so that the GPU path is really tested).
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -46,9 +47,17 @@ inline double max_diff(std::span<const float> a, std::span<const float> b) {
   return m;
 }
 
-/// A path in the system's temporary folder.
+/// A path in this test process's own folder under the system's temporary one (made on first
+/// use): ctest runs the tests side by side, and two processes writing and reading one file of
+/// the same name raced.
 inline std::string temp_path(const std::string& name) {
-  return (std::filesystem::temp_directory_path() / name).string();
+  static const std::filesystem::path dir = [] {
+    const auto d =
+        std::filesystem::temp_directory_path() / ("chladni_test_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(d);
+    return d;
+  }();
+  return (dir / name).string();
 }
 /// The whole file as a string ("" when it cannot be read).
 inline std::string read_file(const std::string& path) {

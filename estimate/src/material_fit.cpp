@@ -318,10 +318,11 @@ MaterialFit fit_material(std::span<const double> x, double sample_rate, const Fe
                          const StruckModes& modes, const DampingFit& damping_start,
                          const MaterialFitOptions& options) {
   if (features.origin >= x.size()) throw InputError("material fit: the strike is past the end");
-  const double top = options.max_frequency > 0 ? options.max_frequency : 0.45 * sample_rate;
-  PsychoSpectrogram target(x.subspan(features.origin), sample_rate, top);
+  MaterialFitOptions o = options;  // one default band for the target and the search
+  if (!(o.max_frequency > 0)) o.max_frequency = 0.45 * sample_rate;
+  PsychoSpectrogram target(x.subspan(features.origin), sample_rate, o.max_frequency);
   target.set_noise(features.residual);
-  return fit_material(features, target, modes, damping_start, options);
+  return fit_material(features, target, modes, damping_start, o);
 }
 
 }  // namespace chladni::estimate
