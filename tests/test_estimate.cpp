@@ -220,7 +220,9 @@ TEST(EstimateRecordings, FindsThePartialsOfEachRecording) {
       EXPECT_GT(near->decay, 0.0) << f;
       EXPECT_GT(near->decay_sigma, 0.0) << f;
       EXPECT_LT(near->decay_sigma, near->decay) << f;
-      if (f == 261.58) EXPECT_NEAR(near->decay, 4.70, 0.03 * 4.70);
+      if (f == 261.58) {
+        EXPECT_NEAR(near->decay, 4.70, 0.03 * 4.70);
+      }
     }
   }
 }

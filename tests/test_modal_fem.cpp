@@ -27,6 +27,7 @@ double hz(double omega) {
 
 TEST(ModalFem, SteelBarMatchesTimoshenkoWithinOnePercent) {
   PrecomputeOptions o;  // defaults: steel, quadratic tets, all modes below 20 kHz
+  o.transfer = false;   // frequencies only (transfer has its own tests)
   PrecomputeReport r;
   const Soundbank b = precompute_mesh(kMeshes + "/bar.obj", o, r);
   EXPECT_EQ(r.eigen.rigid_removed, 6u);
@@ -61,6 +62,7 @@ TEST(ModalFem, FreeSphereMatchesLambWithinOnePercent) {
   const double a = 0.1;
   PrecomputeOptions o;
   o.max_frequency = 15000;
+  o.transfer = false;
   PrecomputeReport r;
   const Soundbank b = precompute_surface(test::icosphere(a, 3), "icosphere", o, r);
   EXPECT_EQ(r.eigen.rigid_removed, 6u);
@@ -125,6 +127,7 @@ TEST(ModalFem, FirstNModesAndBandLimitsAreHonoured) {
   PrecomputeOptions o;
   o.max_modes = 5;
   o.max_tet_volume = 1e-6;
+  o.transfer = false;
   PrecomputeReport r;
   const Soundbank b = precompute_mesh(kMeshes + "/bar.obj", o, r);
   EXPECT_EQ(r.computed, 5u);
@@ -159,6 +162,7 @@ TEST(ModalFem, DampingPresetsSetDecayRates) {
   o.max_modes = 3;
   o.order = 1;
   o.max_tet_volume = 1e-6;
+  o.transfer = false;
   PrecomputeReport r;
   const Soundbank b = precompute_mesh(kMeshes + "/bar.obj", o, r);
   for (std::size_t i = 0; i < b.mode_count(); ++i)  // d = (a1 + a2 omega^2) / 2
@@ -184,6 +188,7 @@ TEST(ModalFem, BlockLanczosAndSpectraAgree) {
   PrecomputeOptions o;
   o.max_modes = 12;
   o.max_tet_volume = 1e-6;
+  o.transfer = false;
   PrecomputeReport rb, rs;
   const Soundbank b = precompute_mesh(kMeshes + "/bar.obj", o, rb);
   o.eigensolver = EigenOptions::Method::Spectra;
