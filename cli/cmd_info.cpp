@@ -7,19 +7,26 @@
 #include <vector>
 
 #include "chladni/core/error.hpp"
+#include "chladni/core/output_file.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "commands.hpp"
+#include "info_plot.hpp"
 
 namespace chladni::cli {
 namespace {
 
 struct InfoArgs {
-  std::string bank;
+  std::string bank, plot;
   bool json = false;
 };
 
 void run_info(const InfoArgs& a) {
+  if (!a.plot.empty()) check_output_path(a.plot, "--plot");
   const Soundbank b = read_soundbank(a.bank);
+  if (!a.plot.empty()) {
+    write_info_plot(a.plot, a.bank, b);
+    if (!a.json) std::printf("wrote %s\n", a.plot.c_str());
+  }
   nlohmann::json meta = nlohmann::json::parse(b.metadata_json, nullptr, false);
   if (meta.is_discarded()) meta = b.metadata_json;
   const double ln1000 = std::log(1000.0);
@@ -158,6 +165,9 @@ void add_info(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("info", "Print a soundbank's metadata and mode table");
   cmd->add_option("bank", a->bank, "Soundbank (.chbank)")->required();
   cmd->add_flag("--json", a->json, "Print JSON instead of a table");
+  cmd->add_option("--plot", a->plot,
+                  "Also write a PNG: damping ratio per mode with the material's curve, and each "
+                  "mode's radiation at 1 m");
   cmd->callback([a] { run_info(*a); });
 }
 

@@ -50,7 +50,8 @@ void run_gen(const GenArgs& a) {
 }
 
 struct AnalyzeArgs {
-  std::string animation, events, output, db, mode = "database", backend = "cpu", spectrogram;
+  std::string animation, events, output, db, mode = "database", backend = "cpu";
+  SpectrogramArgs spectrogram;
   std::vector<double> listener;
   std::uint64_t seed = 1;
   runtime::PaperAnalysisOptions options;
@@ -99,10 +100,9 @@ void run_synthesis(const AnalyzeArgs& a, PaperAnimation& anim) {
       "%.0fx faster than real time\n",
       rep.analysis_ms / rep.frames, rep.synthesis_ms / rep.frames, rep.worst_frame_ms,
       rep.audio_seconds / rep.wall_seconds);
-  if (!a.spectrogram.empty()) {
-    write_spectrogram_png(a.spectrogram, audio);
-    std::printf("wrote %s\n", a.spectrogram.c_str());
-  }
+  const std::string title =
+      "paper " + a.animation + ": " + a.mode + " mode" + (fb ? " on " + fb->name() : std::string());
+  write_spectrogram(a.spectrogram, audio, title, {rep.crumple_times, "crumpling"});
 }
 
 nlohmann::json resonator_json(const runtime::PaperResonator& r) {
@@ -114,7 +114,7 @@ nlohmann::json resonator_json(const runtime::PaperResonator& r) {
 void run_analyze(const AnalyzeArgs& a) {
   if (!a.output.empty()) check_output_path(a.output, "output");
   if (!a.events.empty()) check_output_path(a.events, "--events");
-  if (!a.spectrogram.empty()) check_output_path(a.spectrogram, "--spectrogram");
+  if (!a.spectrogram.path.empty()) check_output_path(a.spectrogram.path, "--spectrogram");
   PaperAnimation anim = load_paper_animation(a.animation);
   if (!a.output.empty()) {
     run_synthesis(a, anim);
@@ -246,7 +246,7 @@ void add_paper(CLI::App& app) {
       ->check(finite_in(-1e6, 1e6))
       ->delimiter(',')
       ->expected(3);
-  cmd->add_option("--spectrogram", a->spectrogram, "Also write the sound's spectrogram as PNG");
+  add_spectrogram_options(*cmd, a->spectrogram);
   cmd->add_option("--seed", a->seed, "Random seed (variants, phases, clicks)");
   cmd->add_option("--ridge-angle", a->options.ridge_angle, "a_max (rad) of a ridge (0.5)")
       ->check(finite_above(0, 3.1416));

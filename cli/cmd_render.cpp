@@ -15,6 +15,7 @@
 #include "chladni/runtime/scene/scene_objects.hpp"
 #include "commands.hpp"
 #include "scene_setup.hpp"
+#include "spectrogram.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -23,6 +24,7 @@ struct RenderArgs : SceneArgs {
   std::string scene, output, format = "float";
   int sample_rate = 0;
   double normalize_db = NAN;
+  SpectrogramArgs spectrogram;
 };
 
 void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
@@ -58,6 +60,15 @@ void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
                   rep.gain_updates ? 1e3 * rep.gain_seconds / double(rep.gain_updates) : 0.0);
     std::printf("wrote %s\n", a.output.c_str());
   }
+  if (!a.spectrogram.path.empty()) {
+    plot::Events marks{{}, scene.shakes.empty() ? "impacts" : "impacts and shakes"};
+    for (const auto& e : scene.events) marks.times.push_back(e.time);
+    for (const auto& e : scene.shakes) marks.times.push_back(e.time);
+    write_spectrogram(a.spectrogram, audio,
+                      "render " + a.scene + ": " + std::to_string(scene.objects.size()) +
+                          " object" + (scene.objects.size() == 1 ? "" : "s") + " on " + fb->name(),
+                      marks, a.quiet);
+  }
   if (std::isnan(a.normalize_db) && rep.peak > 1.0 && format != SampleFormat::Float32) {
     std::fprintf(stderr, "warning: peak %.3g exceeds full scale and was clipped; use --normalize\n",
                  rep.peak);
@@ -66,6 +77,7 @@ void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
 
 void run_render(const RenderArgs& a) {
   check_output_path(a.output, "output");
+  if (!a.spectrogram.path.empty()) check_output_path(a.spectrogram.path, "--spectrogram");
   const SampleFormat format = parse_sample_format(a.format);
   Scene scene = load_scene(a.scene);
   if (a.sample_rate) scene.sample_rate = a.sample_rate;
@@ -90,6 +102,7 @@ void add_render(CLI::App& app) {
       ->check(finite_in(-120, 0));
   cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")
       ->capture_default_str();
+  add_spectrogram_options(*cmd, a->spectrogram);
   cmd->callback([a] { run_render(*a); });
 }
 

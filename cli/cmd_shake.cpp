@@ -23,8 +23,8 @@ namespace chladni::cli {
 namespace {
 
 struct ShakeArgs {
-  std::string instrument, output, bank, backend = "cpu", format = "float", listener = "0,0,1",
-                                        spectrogram;
+  std::string instrument, output, bank, backend = "cpu", format = "float", listener = "0,0,1";
+  SpectrogramArgs spectrogram;
   double duration = 2.0, rate = 4.0, particles = 0, energy = 0.5, impulse = 1e-3;
   double normalize_db = NAN;
   int sample_rate = 48000, threads = 0;
@@ -45,7 +45,7 @@ void run_shake(const ShakeArgs& a) {
   if (a.instrument.empty()) throw InputError("name an instrument (chladni shake --list)");
   if (a.output.empty()) throw InputError("-o OUT.wav is required");
   check_output_path(a.output, "output");
-  if (!a.spectrogram.empty()) check_output_path(a.spectrogram, "--spectrogram");
+  if (!a.spectrogram.path.empty()) check_output_path(a.spectrogram.path, "--spectrogram");
   const runtime::PhisemPreset& preset = runtime::phisem_preset(a.instrument);
   const SampleFormat format = parse_sample_format(a.format);
   const double fs = a.sample_rate;
@@ -119,7 +119,6 @@ void run_shake(const ShakeArgs& a) {
     for (float& x : audio.samples) x = static_cast<float>(x * g);
   }
   write_wav(a.output, audio, format);
-  if (!a.spectrogram.empty()) write_spectrogram_png(a.spectrogram, audio);
   if (!a.quiet) {
     uint64_t collisions = 0;
     for (uint32_t v = 0; v < bank.voice_count(); ++v) collisions += bank.state(int(v)).collisions;
@@ -131,7 +130,16 @@ void run_shake(const ShakeArgs& a) {
                 fb->name().c_str(), bank.backend_name().c_str(), a.duration, wall,
                 wall > 0 ? a.duration / wall : 0.0, peak);
     std::printf("wrote %s\n", a.output.c_str());
-    if (!a.spectrogram.empty()) std::printf("wrote %s\n", a.spectrogram.c_str());
+  }
+  if (!a.spectrogram.path.empty()) {
+    plot::Events marks{{}, "shakes"};
+    for (const auto& s : shakes)
+      if (marks.times.empty() || s.time > marks.times.back()) marks.times.push_back(s.time);
+    char title[256];
+    std::snprintf(title, sizeof title, "shake %s: %u voice%s, %.3g shakes/s, energy %.3g%s%s",
+                  a.instrument.c_str(), a.voices, a.voices == 1 ? "" : "s", a.rate, a.energy,
+                  a.bank.empty() ? "" : ", on ", a.bank.c_str());
+    write_spectrogram(a.spectrogram, audio, title, marks, a.quiet);
   }
   if (std::isnan(a.normalize_db) && peak > 1.0 && format != SampleFormat::Float32)
     std::fprintf(stderr, "warning: peak %.3g exceeds full scale and was clipped; use --normalize\n",
@@ -188,7 +196,7 @@ void add_shake(CLI::App& app) {
       ->check(finite_in(-120, 0));
   cmd->add_option("--format", a->format, "Sample format: float, pcm24, pcm16")
       ->capture_default_str();
-  cmd->add_option("--spectrogram", a->spectrogram, "Also write the sound's spectrogram as PNG");
+  add_spectrogram_options(*cmd, a->spectrogram);
   cmd->add_flag("-q,--quiet", a->quiet, "Print nothing but errors");
   cmd->callback([a] { run_shake(*a); });
 }

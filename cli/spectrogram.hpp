@@ -1,22 +1,25 @@
 #pragma once
-// Spectrogram of a sound as a PNG image (time left to right, frequency bottom to top, linear
-// up to Nyquist, dB colour scale), the way the paper's figures show its sounds.
+// --spectrogram PNG [--linear-frequency] for the commands that make a sound (render, paper,
+// shake): the sound, mixed to mono, as plot::write_sound_png's labelled figure.
+#include <CLI/CLI.hpp>
 #include <string>
 
 #include "chladni/core/audio_file.hpp"
+#include "chladni/plot/sound_figure.hpp"
 
 namespace chladni::cli {
 
-struct SpectrogramOptions {
-  int fft_size = 1024;
-  int hop = 256;
-  int height = 512;      ///< pixels; frequency bins are merged or repeated to fit
-  int max_width = 4096;  ///< hops are merged (max power) beyond this many columns
-  double range_db = 90;  ///< below the loudest cell maps to black
+struct SpectrogramArgs {
+  std::string path;  ///< empty: none asked for
+  bool linear = false;
 };
 
-/// Channels are mixed to mono. Throws InputError when the file cannot be written.
-void write_spectrogram_png(const std::string& path, const AudioBuffer& audio,
-                           const SpectrogramOptions& options = {});
+/// Adds --spectrogram and --linear-frequency to `cmd`.
+void add_spectrogram_options(CLI::App& cmd, SpectrogramArgs& args);
+
+/// Writes `audio` (channels mixed) with `title` and `events`; prints "wrote PATH" unless quiet.
+void write_spectrogram(const SpectrogramArgs& args, const AudioBuffer& audio,
+                       const std::string& title, const plot::Events& events = {},
+                       bool quiet = false);
 
 }  // namespace chladni::cli

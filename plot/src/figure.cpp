@@ -55,7 +55,7 @@ std::vector<double> ticks(const Axis& a) {
     return out;
   }
   const double span = a.hi - a.lo;
-  double step = std::pow(10.0, std::floor(std::log10(span)));
+  double step = std::pow(10.0, std::floor(std::log10(span)) - 1);  // the finest that fits
   for (double m : {1.0, 2.0, 5.0, 10.0})
     if (span / (step * m) <= 8) {
       step *= m;
@@ -227,14 +227,25 @@ void Figure::spectrogram(const Rect& r, const Spectrogram& s, const std::string&
   cairo_surface_t* img = cairo_image_surface_create(CAIRO_FORMAT_RGB24, w, h);
   unsigned char* data = cairo_image_surface_get_data(img);
   const int stride = cairo_image_surface_get_stride(img);
-  for (int row = 0; row < h; ++row) {
-    const double u = 1 - (row + 0.5) / h;
+  // Each pixel shows the loudest cell it covers: a row spanning many bins (high on a log axis, or
+  // a linear one) or a column spanning many frames loses no peak.
+  auto bin_at = [&](double u) {
     const double f = linear ? fmax * u : fmin * std::pow(fmax / fmin, u);
-    const std::size_t bin = std::min<std::size_t>(s.bins - 1, std::size_t(f / s.bin_hz + 0.5));
+    return std::min<std::size_t>(s.bins - 1, std::size_t(std::max(0.0, f / s.bin_hz + 0.5)));
+  };
+  for (int row = 0; row < h; ++row) {
+    const std::size_t b1 = bin_at(1 - double(row) / h), b0 = bin_at(1 - (row + 1.0) / h);
+    const std::size_t lo = b1 > b0 ? b0 : bin_at(1 - (row + 0.5) / h), hi = std::max(lo, b1);
     for (int col = 0; col < w; ++col) {
-      const std::size_t frame =
-          std::min<std::size_t>(s.frames - 1, std::size_t((col + 0.5) / w * double(s.frames)));
-      const double v = s.frames ? s.db[frame * s.bins + bin] : -1e9;
+      double v = -1e9;
+      if (s.frames) {
+        const std::size_t f0 = std::min(s.frames - 1, std::size_t(col * double(s.frames) / w));
+        const std::size_t f1 =
+            std::max(f0 + 1, std::min(s.frames, std::size_t((col + 1) * double(s.frames) / w)));
+        for (std::size_t f = f0; f < f1; ++f)
+          for (std::size_t b = lo; b <= (b1 > b0 ? hi : lo); ++b)
+            v = std::max(v, double(s.db[f * s.bins + b]));
+      }
       const Colour c = colour_map(1 - (top_db - v) / range_db);
       auto* px = reinterpret_cast<uint32_t*>(data + row * stride) + col;
       *px = (uint32_t(c.r * 255) << 16) | (uint32_t(c.g * 255) << 8) | uint32_t(c.b * 255);
@@ -253,6 +264,16 @@ void Figure::spectrogram(const Rect& r, const Spectrogram& s, const std::string&
     cairo_line_to(m.cr, m.px(t), r.y + r.h);
     cairo_stroke(m.cr);
     cairo_set_dash(m.cr, nullptr, 0, 0);
+  }
+  if (!events.times.empty() && !events.label.empty()) {
+    cairo_set_source_rgb(m.cr, 0.3, 0.9, 1.0);
+    const double dash[2] = {4, 3};
+    cairo_set_dash(m.cr, dash, 2, 0);
+    cairo_move_to(m.cr, r.x + r.w - 150, r.y + 14);
+    cairo_line_to(m.cr, r.x + r.w - 130, r.y + 14);
+    cairo_stroke(m.cr);
+    cairo_set_dash(m.cr, nullptr, 0, 0);
+    m.text(r.x + r.w - 124, r.y + 18, events.label, 0, kFont - 1);
   }
   m.axes(title);
   // Colour bar.

@@ -116,6 +116,9 @@ const PaperFrameAnalysis& PaperRenderer::step() {
     resonators += static_cast<std::uint32_t>(ev.resonators.size());
     if (ev.type == PaperEventType::Crumple) {
       ++report_.crumple_events;
+      const double t = f / anim_.frame_rate;
+      if (report_.crumple_times.empty() || report_.crumple_times.back() < t)
+        report_.crumple_times.push_back(t);
       // Clips scale linearly with the curvature change (§5), up to a cap.
       const double scale = std::min(ev.amplitude / opt_.crumple_reference, opt_.crumple_max_scale);
       for (const PaperResonator& r : ev.resonators) {

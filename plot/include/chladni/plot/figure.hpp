@@ -30,11 +30,13 @@ struct Spectrogram {
   float max_db() const;
 };
 
-/// Hann-windowed STFT of `x` at sample rate `fs`.
+/// Hann-windowed STFT of `x` at sample rate `fs`. Past `max_frames` hops, consecutive frames are
+/// merged (the loudest per bin), so a long sound keeps its short events in bounded memory.
 Spectrogram spectrogram(const std::vector<double>& x, double fs, std::size_t fft_size = 2048,
-                        std::size_t hop = 256);
+                        std::size_t hop = 256, std::size_t max_frames = 4096);
 
-/// Markers in time (s), drawn as dashed verticals over a spectrogram.
+/// Markers in time (s), drawn as dashed verticals over a spectrogram; `label` names them in the
+/// panel's legend.
 struct Events {
   std::vector<double> times;
   std::string label;

@@ -54,6 +54,7 @@ struct PaperSynthOptions {
 struct PaperRenderReport {
   std::uint32_t frames = 0;
   std::uint64_t friction_events = 0, crumple_events = 0, resonators = 0;
+  std::vector<double> crumple_times;  ///< s, each frame with a crumpling event (for plots)
   std::uint32_t max_resonators_in_frame = 0;
   std::uint32_t peak_modal_voices = 0;
   double analysis_ms = 0, synthesis_ms = 0;  ///< totals

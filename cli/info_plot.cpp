@@ -1,0 +1,125 @@
+#include "info_plot.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "chladni/plot/figure.hpp"
+#include "chladni/runtime/modal/object_modes.hpp"
+#include "chladni/runtime/scene/scene_objects.hpp"
+
+namespace chladni::cli {
+namespace {
+
+constexpr double kTwoPi = 2 * std::numbers::pi;
+
+// Log-axis bounds around the positive values of v, widened by `pad` and rounded out to 1, 2 or
+// 5 x 10^k.
+std::pair<double, double> log_bounds(const std::vector<double>& v, double pad) {
+  double lo = INFINITY, hi = 0;
+  for (double x : v)
+    if (x > 0 && std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
+  if (!(hi > 0)) return {1e-4, 1e-1};
+  lo /= pad, hi *= pad;
+  const double el = std::pow(10.0, std::floor(std::log10(lo)));
+  const double eh = std::pow(10.0, std::floor(std::log10(hi)));
+  double a = el, b = 10 * eh;
+  for (double m : {5.0, 2.0, 1.0})
+    if (m * el <= lo) {
+      a = m * el;
+      break;
+    }
+  for (double m : {1.0, 2.0, 5.0})
+    if (m * eh >= hi) {
+      b = m * eh;
+      break;
+    }
+  return {a, b};
+}
+
+// Pressure at 1 m per unit modal acceleration, rms over 14 directions at max(1 m, 4 R): the
+// runtime's listener gain (transfer where usable, else the compact-source estimate) scaled back
+// by distance and omega_d^2.
+std::vector<double> radiation_at_1m(const ModalModel& model) {
+  runtime::ObjectModes object = runtime::object_modes(model);
+  const Vec3 c = model.transfer ? model.transfer->centre : Vec3{0, 0, 0};
+  const double r = std::max(1.0, model.transfer ? 4 * model.transfer->radius : 1.0);
+  std::vector<double> sum(model.mode_count(), 0.0);
+  std::vector<Vec3> dirs{{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int k = 0; k < 8; ++k)
+    dirs.push_back(scale(Vec3{k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0},
+                         1 / std::sqrt(3.0)));
+  for (const Vec3& d : dirs) {
+    runtime::gains_at_listener(model, object, add(c, scale(d, r)));
+    for (std::size_t i = 0; i < sum.size(); ++i)
+      sum[i] += double(object.modes[i].gain) * object.modes[i].gain;
+  }
+  std::vector<double> out(sum.size());
+  for (std::size_t i = 0; i < sum.size(); ++i) {
+    const double wd = model.damped_omega(i);
+    out[i] = wd > 0 ? std::sqrt(sum[i] / double(dirs.size())) * r / (wd * wd) : NAN;
+  }
+  return out;
+}
+
+}  // namespace
+
+void write_info_plot(const std::string& path, const std::string& bank_path, const Soundbank& b) {
+  const ModalModel model = to_modal_model(b, bank_path);
+  const std::size_t n = model.mode_count();
+  std::vector<double> f(n), zeta(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    f[i] = model.damped_omega(i) / kTwoPi;
+    zeta[i] = model.decay[i] / model.omega[i];
+  }
+  plot::Figure fig(1200, 980, bank_path + ": " + std::to_string(n) + " modes, " + b.material.name);
+  const auto [flo, fhi] = log_bounds(f, 1.2);
+  const auto [zlo, zhi] = log_bounds(zeta, 2);
+  const plot::Colour blue{0.12, 0.47, 0.71}, red{0.84, 0.15, 0.16}, grey{0.55, 0.55, 0.55},
+      green{0.17, 0.63, 0.17};
+  fig.panel({100, 70, 1040, 360}, {"frequency (Hz)", flo, fhi, true},
+            {"damping ratio d / omega", zlo, zhi, true}, "damping per mode");
+  fig.points(f, zeta, {}, {}, blue, "modes");
+  std::vector<double> cf, cz;
+  for (int k = 0; k <= 300; ++k) {
+    const double x = flo * std::pow(fhi / flo, k / 300.0), w = kTwoPi * x;
+    cf.push_back(x);
+    try {
+      cz.push_back(b.material.damping.coefficient(w) / (2 * w));
+    } catch (const std::exception&) {
+      cz.push_back(NAN);  // outside the model's valid range
+    }
+  }
+  fig.line(cf, cz, red, "material: " + b.material.damping.to_string());
+
+  const std::vector<double> rad = radiation_at_1m(model);
+  std::vector<double> db(n);
+  double dlo = INFINITY, dhi = -INFINITY;
+  for (std::size_t i = 0; i < n; ++i) {
+    db[i] = rad[i] > 0 ? 20 * std::log10(rad[i]) : NAN;
+    if (std::isfinite(db[i])) dlo = std::min(dlo, db[i]), dhi = std::max(dhi, db[i]);
+  }
+  if (!std::isfinite(dlo)) dlo = -100, dhi = 0;
+  dlo = 10 * std::floor(dlo / 10 - 0.5), dhi = 10 * std::ceil(dhi / 10 + 0.5);
+  fig.panel({100, 530, 1040, 360}, {"frequency (Hz)", flo, fhi, true},
+            {"radiation at 1 m (dB re 1 Pa s^2 per unit modal acceleration)", dlo, dhi, false},
+            "transfer level per mode (rms over directions)");
+  // One series per source of the gain, so the legend says which modes fell back.
+  const char* names[] = {"equivalent sources", "boundary elements", "poor fit (held-out > 30%)",
+                         "compact-source estimate (no usable transfer)"};
+  const plot::Colour colours[] = {blue, green, red, grey};
+  for (int kind = 0; kind < 4; ++kind) {
+    std::vector<double> x, y;
+    for (std::size_t i = 0; i < n; ++i) {
+      int k = 3;
+      if (b.transfer && b.transfer->usable(i))
+        k = b.transfer->poor(i) ? 2 : b.transfer->modes[i].method == TransferMethod::Bem ? 1 : 0;
+      if (k == kind) x.push_back(f[i]), y.push_back(db[i]);
+    }
+    if (!x.empty()) fig.points(x, y, {}, {}, colours[kind], names[kind]);
+  }
+  fig.write_png(path);
+}
+
+}  // namespace chladni::cli
