@@ -71,6 +71,7 @@ void add_devices(CLI::App& app);
 void add_precompute(CLI::App& app, bool run = true);
 void add_materials(CLI::App& app);
 void add_info(CLI::App& app);
+void add_report(CLI::App& app);
 void add_radiate(CLI::App& app);
 void add_paper(CLI::App& app);
 void add_shake(CLI::App& app);

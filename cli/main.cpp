@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   chladni::cli::add_batch(app);
   chladni::cli::add_estimate(app);
   chladni::cli::add_info(app);
+  chladni::cli::add_report(app);
   chladni::cli::add_materials(app);
   chladni::cli::add_radiate(app);
   chladni::cli::add_paper(app);

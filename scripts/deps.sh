@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Installs every Debian package Chladni needs to build, test and run, skipping what is present.
-# Idempotent; needs root (or sudo) on Debian 12.
+# Idempotent; needs root (or sudo) on Debian 12.   Usage: bash scripts/deps.sh [tests]
 set -euo pipefail
 
 # jackd2 (the JACK server `chladni play` is tested against) and libjack-jackd2-dev: named so that
@@ -17,6 +17,11 @@ PACKAGES=(
   librtaudio-dev libjack-jackd2-dev jackd2 libbullet-dev
   clang-format clang libclang-rt-14-dev llvm
 )
+# `deps.sh tests` adds what only the tests need: Chromium, for the browser tests of the HTML
+# report (driven over the DevTools pipe; its WebGL runs on SwiftShader, no GPU needed).
+if [[ "${1:-}" == "tests" ]]; then
+  PACKAGES+=(chromium)
+fi
 
 missing=()
 for p in "${PACKAGES[@]}"; do

@@ -141,6 +141,11 @@ TEST(CliHostile, Batch) {
   check_command("batch", d + "/batch.json -o " + d + "/batch_out --force -q", 3);
 }
 
+TEST(CliHostile, Report) {
+  const std::string d = inputs().string();
+  check_command("report", d + "/cube.chbank -o " + d + "/report", 4);
+}
+
 TEST(CliHostile, Bench) {
   check_command("bench", "--modes 64 --seconds 0.01 --backend cpu", 3);
 }

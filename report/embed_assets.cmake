@@ -1,0 +1,15 @@
+# Writes OUT, a C++ file defining chladni::report::kAssets from the files in ASSETS (a ;-list),
+# each as a raw string literal, so that the chladni binary carries its report's web files.
+file(WRITE ${OUT} "// Generated from report/web by report/embed_assets.cmake.\n")
+file(APPEND ${OUT} "#include \"report_detail.hpp\"\nnamespace chladni::report {\n")
+file(APPEND ${OUT} "const Asset kAssets[] = {\n")
+foreach(path ${ASSETS})
+  get_filename_component(name ${path} NAME)
+  file(READ ${path} text)
+  string(FIND "${text}" ")chladni_asset\"" clash)
+  if(NOT clash EQUAL -1)
+    message(FATAL_ERROR "${path} contains the raw string delimiter")
+  endif()
+  file(APPEND ${OUT} "  {\"${name}\", R\"chladni_asset(${text})chladni_asset\"},\n")
+endforeach()
+file(APPEND ${OUT} "};\nconst std::size_t kAssetCount = sizeof kAssets / sizeof kAssets[0];\n}\n")
