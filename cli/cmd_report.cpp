@@ -23,8 +23,16 @@ void run_report(ReportArgs& a) {
   o.mesh_scale = precompute::unit_scale(a.unit);
   if (!a.listener.empty()) o.listener = parse_vec3(a.listener, "--listener");
   const Soundbank bank = read_soundbank(a.bank);
-  report::write_report(a.output, bank, o);
-  std::printf("wrote %s/index.html (open it in a browser; no network needed)\n", a.output.c_str());
+  const report::ReportSummary r = report::write_report(a.output, bank, o);
+  std::printf(
+      "wrote %s/index.html: %zu of %zu modes, %.1f MB of data (open it in a browser; "
+      "no network needed)\n",
+      a.output.c_str(), r.modes_shown, r.bank_modes, r.bytes / 1e6);
+  if (r.limited_by_size)
+    std::fprintf(stderr,
+                 "report: only the lowest %zu modes: their shapes on %zu surface points fill the "
+                 "%.0f MB the page may carry (--max-modes to choose fewer)\n",
+                 r.modes_shown, bank.vertices.size(), o.max_shape_bytes / 1e6);
 }
 
 }  // namespace

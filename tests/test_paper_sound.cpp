@@ -13,6 +13,7 @@
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/paper_animation.hpp"
+#include "chladni/plot/sound_figure.hpp"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
 #include "chladni/runtime/filterbank/gpu_filterbank.hpp"
 #include "chladni/runtime/paper/paper_database.hpp"
@@ -538,8 +539,9 @@ TEST(PaperCli, RendersWavAndSpectrogram) {
     return (unsigned(std::uint8_t(head[o])) << 24) | (unsigned(std::uint8_t(head[o + 1])) << 16) |
            (unsigned(std::uint8_t(head[o + 2])) << 8) | unsigned(std::uint8_t(head[o + 3]));
   };
-  EXPECT_EQ(be32(20), 512u);                          // height: frequency rows
-  EXPECT_EQ(be32(16), (audio.frames() + 255) / 256);  // width: one column per hop
+  EXPECT_EQ(be32(16),
+            unsigned(chladni::plot::kSoundFigureWidth));  // the labelled figure (test_plot)
+  EXPECT_EQ(be32(20), unsigned(chladni::plot::kSoundFigureHeight));
   // Bad input: named, exit code 2.
   for (const std::string& bad : {std::string(" --paper-mode granular"), " --db " + dir + "/nodb",
                                  std::string(" --listener 0,nan,0")}) {

@@ -56,6 +56,11 @@ json surface_json(const ModalModel& model, const Soundbank& bank, const ReportOp
   for (std::size_t v = 0; v < verts.size(); ++v) point_of[v] = uint32_t(v);
   if (!o.mesh_path.empty()) {
     const precompute::SurfaceMesh mesh = precompute::read_mesh(o.mesh_path, o.mesh_scale);
+    // Each display vertex looks up its nearest bank point (a linear search): bound the work.
+    if (double(mesh.vertices.size()) * double(model.points.size()) > 4e9)
+      throw InputError(o.mesh_path + ": " + std::to_string(mesh.vertices.size()) +
+                       " vertices against the bank's " + std::to_string(model.points.size()) +
+                       " surface points is too many to map; give a coarser display mesh");
     verts = mesh.vertices, tris = mesh.triangles;
     point_of.resize(verts.size());
     double size = 0, worst = 0;
@@ -115,17 +120,25 @@ json directivity_json(const ModalModel& model, const Vec3& centre, double radius
 
 }  // namespace
 
-std::string report_json(const Soundbank& bank, const ReportOptions& o) {
+std::string report_json(const Soundbank& bank, const ReportOptions& o, ReportSummary* summary) {
   ModalModel model = to_modal_model(bank, o.bank_path);
   if (!model.has_geometry() || model.normals.size() != model.points.size())
     throw InputError(o.bank_path + ": the soundbank has no surface to show");
+  const std::size_t by_size = std::max<std::size_t>(
+      1, std::size_t(o.max_shape_bytes / (12.0 * double(model.points.size()))));
+  const std::size_t limit = std::min(o.max_modes, by_size);
   std::vector<std::size_t> kept;
-  for (std::size_t i = 0; i < model.mode_count() && kept.size() < o.max_modes; ++i)
+  for (std::size_t i = 0; i < model.mode_count() && kept.size() < limit; ++i)
     if (model.damped_omega(i) > 0 && model.damped_omega(i) < std::numbers::pi * o.sample_rate)
       kept.push_back(i);
   if (kept.empty())
     throw InputError(o.bank_path + ": no mode lies below the Nyquist frequency at " +
                      std::to_string(o.sample_rate) + " Hz");
+  if (summary) {
+    summary->bank_modes = bank.mode_count();
+    summary->modes_shown = kept.size();
+    summary->limited_by_size = by_size < o.max_modes && kept.size() == by_size;
+  }
   keep_modes(model, kept);
 
   Vec3 lo = model.points[0], hi = lo;

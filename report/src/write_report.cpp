@@ -29,17 +29,20 @@ void write_file(const fs::path& path, std::string_view text) {
 
 }  // namespace
 
-void write_report(const std::string& dir, const Soundbank& bank, const ReportOptions& o) {
+ReportSummary write_report(const std::string& dir, const Soundbank& bank, const ReportOptions& o) {
   const fs::path d(dir);
   std::error_code ec;
   if (fs::exists(d, ec) && !fs::is_directory(d, ec))
     throw InputError(dir + ": exists and is not a folder (the report is a folder)");
   // All the work first: a refused bank or mesh leaves the folder as it was.
-  const std::string data = "window.CHLADNI_REPORT = " + report_json(bank, o) + ";\n";
+  ReportSummary summary;
+  const std::string data = "window.CHLADNI_REPORT = " + report_json(bank, o, &summary) + ";\n";
+  summary.bytes = data.size();
   fs::create_directories(d, ec);
   if (ec) throw InputError(dir + ": cannot create the folder (" + ec.message() + ")");
   for (std::size_t i = 0; i < kAssetCount; ++i) write_file(d / kAssets[i].name, kAssets[i].text);
   write_file(d / "bank-data.js", data);
+  return summary;
 }
 
 }  // namespace chladni::report

@@ -21,14 +21,25 @@ struct ReportOptions {
   double impulse = 0.01;         ///< N s, of a click
   double contact_time = 2e-4;    ///< s, half-sine contact of a click
   int directivity_angles = 72;   ///< per plane
+  /// The mode shapes the page carries (3 floats per mode and surface point) stay under this:
+  /// past it, fewer modes are shown.
+  double max_shape_bytes = 256e6;
+};
+
+struct ReportSummary {
+  std::size_t modes_shown = 0, bank_modes = 0;
+  bool limited_by_size = false;  ///< max_shape_bytes, not max_modes, set modes_shown
+  std::size_t bytes = 0;         ///< of the data file
 };
 
 /// What the report holds, as the JSON object assigned to window.CHLADNI_REPORT in bank-data.js.
-std::string report_json(const Soundbank& bank, const ReportOptions& options);
+std::string report_json(const Soundbank& bank, const ReportOptions& options,
+                        ReportSummary* summary = nullptr);
 
 /// Writes index.html, report.css, viewer.js, strike.js, report.js and bank-data.js into `dir`
 /// (created if missing; each file replaced atomically). InputError naming the path when it
 /// cannot; nothing is written when the bank or mesh is refused.
-void write_report(const std::string& dir, const Soundbank& bank, const ReportOptions& options);
+ReportSummary write_report(const std::string& dir, const Soundbank& bank,
+                           const ReportOptions& options);
 
 }  // namespace chladni::report
