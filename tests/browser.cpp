@@ -99,7 +99,8 @@ Browser::Browser(int width, int height) {
 void Browser::attach() {
   // Attach to the page the browser opened (flat sessions: one pipe for all).
   std::string target;
-  for (const auto& t : browser_call("Target.getTargets")["targetInfos"])
+  const json targets = browser_call("Target.getTargets");
+  for (const auto& t : targets["targetInfos"])
     if (t["type"] == "page") target = t["targetId"];
   if (target.empty())
     target = browser_call("Target.createTarget", {{"url", "about:blank"}})["targetId"];

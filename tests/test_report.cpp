@@ -145,11 +145,18 @@ TEST(ReportBrowser, DrawsTheModesAndAClickSoundsLikeTheRuntime) {
     }
   EXPECT_GT(double(object) / (double(w) * h), 0.03) << "the canvas is blank";
   EXPECT_GT(colours.size(), 20u);
-  // Another mode, another picture; the first again, the first picture.
-  browser.evaluate("chladniReport.selectMode(3); chladniReport.freeze(Math.PI / 2)");
+  // Another mode (chosen in the selector), another picture; the first again (a click on its
+  // table row), the first picture.
+  browser.evaluate(
+      "(() => { const s = document.getElementById('mode-select'); s.value = '3';"
+      " s.dispatchEvent(new Event('change')); chladniReport.freeze(Math.PI / 2); })()");
+  EXPECT_EQ(browser.evaluate("chladniReport.selected()").get<int>(), 3);
   const auto b = browser.screenshot();
   EXPECT_GT(changed(a, b, x0, y0, w, h), 0.01);
-  browser.evaluate("chladniReport.selectMode(0); chladniReport.freeze(Math.PI / 2)");
+  browser.evaluate(
+      "document.getElementById('modes').tBodies[0].rows[0].click();"
+      " chladniReport.freeze(Math.PI / 2)");
+  EXPECT_EQ(browser.evaluate("chladniReport.selected()").get<int>(), 0);
   EXPECT_LT(changed(a, browser.screenshot(), x0, y0, w, h), 0.001);
 
   // A real click on the surface point nearest the canvas centre's hit.

@@ -158,6 +158,7 @@
   // Synthesizes the strike, renders it through an OfflineAudioContext (normalized to -1 dBFS),
   // and plays the result when asked.
   async function strike(hit) {
+    const t0 = performance.now();
     const point = nearestPoint(hit.point);
     const n = [pointNormal[3 * point], pointNormal[3 * point + 1], pointNormal[3 * point + 2]];
     const direction = n.map((x) => -x);  // into the surface
@@ -177,13 +178,15 @@
     src.start();
     const rendered = await ctx.startRendering();
     const samples = rendered.getChannelData(0);
+    const ms = performance.now() - t0;
     api.lastStrike = { point, position: hit.point, direction, sampleRate: s.sample_rate,
-                       peakPa: peak, samples };
+                       peakPa: peak, samples, ms };
     api.strikes += 1;
     $("strike-info").textContent =
       `Struck at surface point ${point} (${hit.point.map((v) => fmt(v, 3)).join(", ")}) m with ` +
       `${s.impulse} N s over ${s.contact_time * 1e3} ms: peak ${fmt(peak, 3)} Pa at the listener ` +
-      `(played normalized). Orange ticks: the bank's frequencies.`;
+      `(played normalized; ${raw.length} samples from ${R.modes.length} modes in ` +
+      `${Math.round(ms)} ms). Orange ticks: the bank's frequencies.`;
     drawSpectrum(samples, s.sample_rate);
     if ($("play").checked) play(rendered);
   }

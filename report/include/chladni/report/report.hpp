@@ -23,7 +23,7 @@ struct ReportOptions {
   int directivity_angles = 72;   ///< per plane
   /// The mode shapes the page carries (3 floats per mode and surface point) stay under this:
   /// past it, fewer modes are shown.
-  double max_shape_bytes = 256e6;
+  double max_shape_bytes = 128e6;
 };
 
 struct ReportSummary {
