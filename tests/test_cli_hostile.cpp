@@ -19,7 +19,13 @@ namespace {
 namespace fs = std::filesystem;
 using chladni::test::run_cli;
 
+#ifndef CHLADNI_SANITIZED
 const char* const kHostile[] = {"nan", "inf", "-inf", "-1", "0", "1e-300", "1e300", "4294967297"};
+#else
+// The sanitizer build runs each value in a process of about a third of a second, hundreds of
+// them: one of each class there (the release build tries all eight for the exit codes).
+const char* const kHostile[] = {"nan", "-1", "0", "1e300", "4294967297"};
+#endif
 
 // Inputs every command's quick run needs, made once.
 const fs::path& inputs() {
