@@ -5,25 +5,12 @@
 #include <numbers>
 
 #include "chladni/plot/figure.hpp"
+#include "damping_curve.hpp"
 
 namespace chladni::cli {
 namespace {
 
 constexpr double kTwoPi = 2 * std::numbers::pi;
-
-// zeta(f) = beta(omega^2) / (2 omega) over a log grid (NaN where the model is invalid).
-void curve_points(const DampingModel& m, double lo, double hi, std::vector<double>& f,
-                  std::vector<double>& zeta) {
-  for (int k = 0; k <= 200; ++k) {
-    const double x = lo * std::pow(hi / lo, k / 200.0), w = kTwoPi * x;
-    f.push_back(x);
-    try {
-      zeta.push_back(m.coefficient(w) / (2 * w));
-    } catch (const std::exception&) {
-      zeta.push_back(NAN);
-    }
-  }
-}
 
 }  // namespace
 
@@ -63,11 +50,11 @@ void write_estimate_plot(const EstimatePlot& p) {
     }
   fig.points(x, y, ylo, yhi, blue, "partials (1-sigma bars)");
   std::vector<double> cf, cz;
-  curve_points(p.curve, lo, hi, cf, cz);
+  damping_curve(p.curve, lo, hi, 200, cf, cz);
   fig.line(cf, cz, red, "through the partials: " + p.curve.to_string());
   if (p.material) {
     std::vector<double> mf, mz;
-    curve_points(*p.material, lo, hi, mf, mz);
+    damping_curve(*p.material, lo, hi, 200, mf, mz);
     fig.line(mf, mz, green, "the fitted material's: " + p.material->to_string(), 1.5);
   }
   fig.write_png(p.path);

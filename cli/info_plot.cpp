@@ -8,6 +8,7 @@
 #include "chladni/plot/figure.hpp"
 #include "chladni/runtime/modal/object_modes.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
+#include "damping_curve.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -82,15 +83,7 @@ void write_info_plot(const std::string& path, const std::string& bank_path, cons
             {"damping ratio d / omega", zlo, zhi, true}, "damping per mode");
   fig.points(f, zeta, {}, {}, blue, "modes");
   std::vector<double> cf, cz;
-  for (int k = 0; k <= 300; ++k) {
-    const double x = flo * std::pow(fhi / flo, k / 300.0), w = kTwoPi * x;
-    cf.push_back(x);
-    try {
-      cz.push_back(b.material.damping.coefficient(w) / (2 * w));
-    } catch (const std::exception&) {
-      cz.push_back(NAN);  // outside the model's valid range
-    }
-  }
+  damping_curve(b.material.damping, flo, fhi, 300, cf, cz);
   fig.line(cf, cz, red, "material: " + b.material.damping.to_string());
 
   const std::vector<double> rad = radiation_at_1m(model);

@@ -50,6 +50,17 @@ std::vector<uint8_t> base64_decode(const std::string& s) {
   return out;
 }
 
+// The pixels of a PNG whose header `img` has read, as RGBA.
+Image finish_png(png_image& img, const std::string& what) {
+  img.format = PNG_FORMAT_RGBA;
+  Image out;
+  out.width = int(img.width), out.height = int(img.height);
+  out.rgba.resize(PNG_IMAGE_SIZE(img));
+  if (!png_image_finish_read(&img, nullptr, out.rgba.data(), 0, nullptr))
+    throw std::runtime_error(what + ": cannot decode the PNG");
+  return out;
+}
+
 }  // namespace
 
 Browser::Browser(int width, int height) {
@@ -256,13 +267,7 @@ Image Browser::screenshot() {
   img.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_memory(&img, png.data(), png.size()))
     throw std::runtime_error("screenshot: not a PNG");
-  img.format = PNG_FORMAT_RGBA;
-  Image out;
-  out.width = int(img.width), out.height = int(img.height);
-  out.rgba.resize(PNG_IMAGE_SIZE(img));
-  if (!png_image_finish_read(&img, nullptr, out.rgba.data(), 0, nullptr))
-    throw std::runtime_error("screenshot: cannot decode");
-  return out;
+  return finish_png(img, "screenshot");
 }
 
 }  // namespace chladni::test
@@ -274,13 +279,7 @@ Image read_png(const std::string& path) {
   img.version = PNG_IMAGE_VERSION;
   if (!png_image_begin_read_from_file(&img, path.c_str()))
     throw std::runtime_error(path + ": not a readable PNG");
-  img.format = PNG_FORMAT_RGBA;
-  Image out;
-  out.width = int(img.width), out.height = int(img.height);
-  out.rgba.resize(PNG_IMAGE_SIZE(img));
-  if (!png_image_finish_read(&img, nullptr, out.rgba.data(), 0, nullptr))
-    throw std::runtime_error(path + ": cannot decode");
-  return out;
+  return finish_png(img, path);
 }
 
 }  // namespace chladni::test

@@ -2,13 +2,13 @@
 // recovered, saved as a preset and used by precompute; bad input exits with 2 and names it.
 #include <gtest/gtest.h>
 
-#include <png.h>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <vector>
 
+#include "browser.hpp"
 #include "chladni/core/damping.hpp"
 #include "cli_support.hpp"
 #include "test_support.hpp"
@@ -97,26 +97,10 @@ TEST(CliEstimate, SolvesAMeshForItsModesFirst) {
 }
 
 // The plot's pixels: 8-bit RGB, row major.
-struct Image {
-  unsigned width = 0, height = 0;
-  std::vector<unsigned char> rgb;
-  double brightness(unsigned x, unsigned y) const {
-    const unsigned char* p = &rgb[3 * (std::size_t(y) * width + x)];
-    return (p[0] + p[1] + p[2]) / (3 * 255.0);
-  }
-};
-
-Image read_png(const std::string& path) {
-  png_image img{};
-  img.version = PNG_IMAGE_VERSION;
-  Image out;
-  if (!png_image_begin_read_from_file(&img, path.c_str())) return out;
-  img.format = PNG_FORMAT_RGB;
-  out.width = img.width;
-  out.height = img.height;
-  out.rgb.resize(PNG_IMAGE_SIZE(img));
-  png_image_finish_read(&img, nullptr, out.rgb.data(), 0, nullptr);
-  return out;
+// Mean of a pixel's three channels, 0 (black) to 1 (white).
+double brightness(const chladni::test::Image& img, unsigned x, unsigned y) {
+  const uint8_t* p = img.at(int(x), int(y));
+  return (p[0] + p[1] + p[2]) / (3 * 255.0);
 }
 
 TEST(CliEstimate, PlotsLabelledSpectrogramsAndTheDampingCurve) {
@@ -125,9 +109,9 @@ TEST(CliEstimate, PlotsLabelledSpectrogramsAndTheDampingCurve) {
   const auto r = run_cli("estimate " + bar.wav + " --bank " + bar.bank +
                          " --hit-point 0.05,0.004,0.005 --listener 0.05,0,1 --plot " + png);
   ASSERT_EQ(r.code, 0) << r.output;
-  const Image img = read_png(png);
-  ASSERT_EQ(img.width, 1400u);
-  ASSERT_EQ(img.height, 1000u);
+  const chladni::test::Image img = chladni::test::read_png(png);
+  ASSERT_EQ(img.width, 1400);
+  ASSERT_EQ(img.height, 1000);
   // The recorded spectrogram (x 90-610, y 70-450, log frequency 50 Hz-22.05 kHz): the bar's
   // second bending mode (about 1,574 Hz) is a bright row where the log axis puts it; at 1 kHz,
   // between partials, the rows stay dark.
@@ -136,8 +120,8 @@ TEST(CliEstimate, PlotsLabelledSpectrogramsAndTheDampingCurve) {
   };
   double on = 0, off = 0;
   for (unsigned x = 100; x < 300; ++x) {
-    on = std::max(on, img.brightness(x, row_of(1574)));
-    off = std::max(off, img.brightness(x, row_of(1000)));
+    on = std::max(on, brightness(img, x, row_of(1574)));
+    off = std::max(off, brightness(img, x, row_of(1000)));
   }
   EXPECT_GT(on, 0.3);
   EXPECT_LT(off, 0.1) << on;
@@ -145,7 +129,7 @@ TEST(CliEstimate, PlotsLabelledSpectrogramsAndTheDampingCurve) {
   auto dark = [&](unsigned x0, unsigned x1, unsigned y0, unsigned y1) {
     std::size_t n = 0;
     for (unsigned y = y0; y < y1; ++y)
-      for (unsigned x = x0; x < x1; ++x) n += img.brightness(x, y) < 0.5;
+      for (unsigned x = x0; x < x1; ++x) n += brightness(img, x, y) < 0.5;
     return n;
   };
   EXPECT_GT(dark(40, 86, 80, 440), 200u);    // frequency ticks
@@ -155,7 +139,7 @@ TEST(CliEstimate, PlotsLabelledSpectrogramsAndTheDampingCurve) {
   std::size_t coloured = 0;
   for (unsigned y = 565; y < 925; ++y)
     for (unsigned x = 95; x < 1305; ++x) {
-      const unsigned char* p = &img.rgb[3 * (std::size_t(y) * img.width + x)];
+      const uint8_t* p = img.at(int(x), int(y));
       coloured += std::abs(int(p[0]) - int(p[2])) > 60;
     }
   EXPECT_GT(coloured, 500u);

@@ -12,7 +12,6 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <set>
-#include <sstream>
 
 #include "browser.hpp"
 #include "chladni/core/audio_file.hpp"
@@ -40,10 +39,8 @@ const std::string& bar_bank() {
 }
 
 json report_data(const fs::path& dir) {
-  std::ifstream in(dir / "bank-data.js");
-  std::stringstream s;
-  s << in.rdbuf();
-  const std::string text = s.str(), head = "window.CHLADNI_REPORT = ";
+  const std::string text = chladni::test::read_file((dir / "bank-data.js").string()),
+                    head = "window.CHLADNI_REPORT = ";
   EXPECT_EQ(text.rfind(head, 0), 0u);
   return json::parse(text.substr(head.size(), text.rfind(';') - head.size()));
 }

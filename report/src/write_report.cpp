@@ -1,4 +1,3 @@
-#include <cstdio>
 #include <filesystem>
 #include <string>
 
@@ -8,26 +7,8 @@
 #include "report_detail.hpp"
 
 namespace chladni::report {
-namespace {
 
 namespace fs = std::filesystem;
-
-void write_file(const fs::path& path, std::string_view text) {
-  const std::string p = path.string();
-  const std::string tmp = temporary_path(p);
-  {
-    std::FILE* f = std::fopen(tmp.c_str(), "wb");
-    if (!f) throw InputError(p + ": cannot open for writing");
-    const bool ok = std::fwrite(text.data(), 1, text.size(), f) == text.size();
-    if (std::fclose(f) != 0 || !ok) {
-      std::remove(tmp.c_str());
-      throw InputError(p + ": writing failed (disk full?)");
-    }
-  }
-  commit_temporary(tmp, p, "report file");
-}
-
-}  // namespace
 
 ReportSummary write_report(const std::string& dir, const Soundbank& bank, const ReportOptions& o) {
   const fs::path d(dir);
@@ -40,8 +21,9 @@ ReportSummary write_report(const std::string& dir, const Soundbank& bank, const 
   summary.bytes = data.size();
   fs::create_directories(d, ec);
   if (ec) throw InputError(dir + ": cannot create the folder (" + ec.message() + ")");
-  for (std::size_t i = 0; i < kAssetCount; ++i) write_file(d / kAssets[i].name, kAssets[i].text);
-  write_file(d / "bank-data.js", data);
+  for (std::size_t i = 0; i < kAssetCount; ++i)
+    write_file_atomic((d / kAssets[i].name).string(), kAssets[i].text, "report file");
+  write_file_atomic((d / "bank-data.js").string(), data, "report data");
   return summary;
 }
 
