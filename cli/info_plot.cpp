@@ -43,7 +43,8 @@ std::pair<double, double> log_bounds(const std::vector<double>& v, double pad) {
 // runtime's listener gain (transfer where usable, else the compact-source estimate) scaled back
 // by distance and omega_d^2.
 std::vector<double> radiation_at_1m(const ModalModel& model) {
-  runtime::ObjectModes object = runtime::object_modes(model);
+  // gains_at_listener sets each mode's gain once, from the model's own: a fresh copy each time.
+  const runtime::ObjectModes base = runtime::object_modes(model);
   const Vec3 c = model.transfer ? model.transfer->centre : Vec3{0, 0, 0};
   const double r = std::max(1.0, model.transfer ? 4 * model.transfer->radius : 1.0);
   std::vector<double> sum(model.mode_count(), 0.0);
@@ -52,6 +53,7 @@ std::vector<double> radiation_at_1m(const ModalModel& model) {
     dirs.push_back(scale(Vec3{k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0},
                          1 / std::sqrt(3.0)));
   for (const Vec3& d : dirs) {
+    runtime::ObjectModes object = base;
     runtime::gains_at_listener(model, object, add(c, scale(d, r)));
     for (std::size_t i = 0; i < sum.size(); ++i)
       sum[i] += double(object.modes[i].gain) * object.modes[i].gain;

@@ -62,6 +62,9 @@ class Browser {
 
 namespace chladni::test {
 
+/// The bytes of base64 text (characters outside the alphabet are skipped).
+std::vector<uint8_t> base64_decode(const std::string& text);
+
 /// A PNG file as RGBA; throws std::runtime_error naming the file when it cannot.
 Image read_png(const std::string& path);
 

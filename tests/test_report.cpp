@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -62,6 +63,17 @@ TEST(ReportCli, WritesTheFolderAndRefusesBadInput) {
                 std::sqrt(w * w - d * d) / (2 * std::numbers::pi), 1e-9 * w);
   }
   EXPECT_EQ(j["points"]["count"].get<std::size_t>(), bank.vertices.size());
+  // Without transfer the runtime's gain is the compact-source estimate, the same in every
+  // direction: each mode's directivity is 1 all round.
+  const std::string packed = j["directivity"]["values"];
+  const std::vector<uint8_t> bytes = chladni::test::base64_decode(packed);
+  ASSERT_EQ(bytes.size(),
+            4 * bank.mode_count() * 3 * j["directivity"]["angles"].get<std::size_t>());
+  for (std::size_t k = 0; k < bytes.size(); k += 4) {
+    float v;
+    std::memcpy(&v, bytes.data() + k, 4);
+    ASSERT_NEAR(v, 1.0f, 1e-5) << "directivity value " << k / 4;
+  }
   EXPECT_EQ(j["surface"]["triangles"].get<std::size_t>(), bank.triangles.size());
 
   // The bank's own mesh as --mesh (in millimetres) lies on it; a mesh elsewhere does not.

@@ -95,7 +95,8 @@ json surface_json(const ModalModel& model, const Soundbank& bank, const ReportOp
 // |p| on three great circles (planes xy, xz, yz) at a far-field distance, by the runtime's gain
 // rule (the multipoles where the transfer is usable), each mode scaled to its loudest direction.
 json directivity_json(const ModalModel& model, const Vec3& centre, double radius, int angles) {
-  runtime::ObjectModes object = runtime::object_modes(model);
+  // gains_at_listener sets each mode's gain once, from the model's own: a fresh copy each time.
+  const runtime::ObjectModes base = runtime::object_modes(model);
   const std::size_t n = model.mode_count();
   const double r = std::max(1.0, 20 * radius);
   std::vector<float> values(n * 3 * angles);
@@ -103,6 +104,7 @@ json directivity_json(const ModalModel& model, const Vec3& centre, double radius
     for (int a = 0; a < angles; ++a) {
       const double t = kTwoPi * a / angles, c = std::cos(t), s = std::sin(t);
       const Vec3 d = plane == 0 ? Vec3{c, s, 0} : plane == 1 ? Vec3{c, 0, s} : Vec3{0, c, s};
+      runtime::ObjectModes object = base;
       runtime::gains_at_listener(model, object, add(centre, scale(d, r)));
       for (std::size_t i = 0; i < n; ++i)
         values[(i * 3 + plane) * angles + a] = std::abs(object.modes[i].gain);
