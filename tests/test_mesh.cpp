@@ -238,6 +238,102 @@ TEST(Tetrahedralize, RefineTetsRefinesWhereAskedAndKeepsTheNodes) {
   EXPECT_THROW(refine_tets(t, std::vector<double>(3, 1.0), o), InternalError);
 }
 
+// Bisection: each child lies in one tetrahedron of the input (found by its centroid), the
+// children of each input tetrahedron fill it exactly and meet its bound, the mesh is conforming
+// (every face in one tetrahedron on the boundary or in two, oppositely turned) and closed, and
+// the quality of the input is not lost.
+TEST(Tetrahedralize, BisectTetsMeetsTheBoundsConformingAndKeepsTheNodes) {
+  TetOptions o;
+  o.max_volume = 2e-5;
+  const TetMesh t = tetrahedralize(test::box_surface({0.3, 0.1, 0.1}, {3, 1, 1}), o);
+  std::vector<double> bound(t.tets.size(), -1.0);
+  for (std::size_t e = 0; e < t.tets.size(); ++e) {
+    double x = 0;
+    for (uint32_t v : t.tets[e]) x += t.nodes[v][0] / 4;
+    if (x < 0.1) bound[e] = tet_volume(t, e) / (e % 2 ? 8 : 3);  // 3 and 2 halvings
+  }
+  const TetMesh r = bisect_tets(t, bound);
+  ASSERT_GT(r.tets.size(), t.tets.size());
+  for (std::size_t v = 0; v < t.nodes.size(); ++v) ASSERT_EQ(r.nodes[v], t.nodes[v]);
+  EXPECT_EQ(r.surface_vertices, t.surface_vertices);
+  auto contains = [&](std::size_t e, const Vec3& p) {  // barycentric signs of p in tet e
+    const auto& q = t.tets[e];
+    for (int k = 0; k < 4; ++k) {
+      TetMesh probe{t.nodes, {q}, 0, {}};
+      probe.nodes.push_back(p);
+      probe.tets[0][k] = uint32_t(probe.nodes.size() - 1);
+      if (tet_volume(probe, 0) < -1e-15) return false;
+    }
+    return true;
+  };
+  std::vector<double> filled(t.tets.size(), 0.0);
+  std::vector<std::size_t> children(t.tets.size(), 0);
+  for (std::size_t c = 0; c < r.tets.size(); ++c) {
+    const double v = tet_volume(r, c);
+    ASSERT_GT(v, 0) << "child " << c;
+    Vec3 centre{0, 0, 0};
+    for (uint32_t n : r.tets[c])
+      for (int k = 0; k < 3; ++k) centre[k] += r.nodes[n][k] / 4;
+    std::size_t parent = t.tets.size();
+    for (std::size_t e = 0; e < t.tets.size() && parent == t.tets.size(); ++e)
+      if (contains(e, centre)) parent = e;
+    ASSERT_LT(parent, t.tets.size()) << "child " << c << " outside the input";
+    filled[parent] += v;
+    ++children[parent];
+    if (bound[parent] > 0) {
+      EXPECT_LE(v, bound[parent] * (1 + 1e-12)) << "child " << c;
+    }
+  }
+  std::size_t split_unmarked = 0;
+  for (std::size_t e = 0; e < t.tets.size(); ++e) {
+    EXPECT_NEAR(filled[e], tet_volume(t, e), 1e-15) << "input tet " << e;
+    if (bound[e] <= 0 && children[e] > 1) ++split_unmarked;
+  }
+  EXPECT_GT(split_unmarked, 0u);                // conformity reaches past the marked region ...
+  EXPECT_LT(r.tets.size(), 8 * t.tets.size());  // ... but not over the whole box
+  std::map<std::array<uint32_t, 3>, std::vector<std::array<uint32_t, 3>>> faces;
+  for (const auto& q : r.tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      // Turned like the tet's boundary (outward): even permutations of the other three.
+      static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+      std::array<uint32_t, 3> f{q[kFace[skip][0]], q[kFace[skip][1]], q[kFace[skip][2]]}, key = f;
+      std::sort(key.begin(), key.end());
+      faces[key].push_back(f);
+    }
+  std::size_t boundary = 0;
+  for (const auto& [key, list] : faces) {
+    ASSERT_LE(list.size(), 2u);
+    if (list.size() == 1) {
+      ++boundary;
+      continue;
+    }
+    const auto &a = list[0], &b = list[1];  // opposite turns: b is a odd permutation of a
+    const bool same = (a == b) || (a[0] == b[1] && a[1] == b[2] && a[2] == b[0]) ||
+                      (a[0] == b[2] && a[1] == b[0] && a[2] == b[1]);
+    EXPECT_FALSE(same) << "two tetrahedra on the same side of a face";
+  }
+  // A face cut one way on one side and another way on the other would show up as faces of one
+  // tetrahedron inside the box: every face of one must lie on the box's surface.
+  EXPECT_EQ(boundary, r.surface_triangles.size());
+  Vec3 lo = r.nodes[0], hi = r.nodes[0];
+  for (const Vec3& p : r.nodes)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  double div = 0;
+  for (const auto& f : r.surface_triangles) {
+    const Vec3 &a = r.nodes[f[0]], &b = r.nodes[f[1]], &c = r.nodes[f[2]];
+    bool on_side = false;
+    for (int k = 0; k < 3; ++k)
+      for (double side : {lo[k], hi[k]}) on_side |= a[k] == side && b[k] == side && c[k] == side;
+    ASSERT_TRUE(on_side) << "a boundary face inside the box: nodes " << f[0] << " " << f[1] << " "
+                         << f[2];
+    div += (a[0] + b[0] + c[0]) / 3 * cross(sub(b, a), sub(c, a))[0] / 2;
+  }
+  EXPECT_NEAR(div, 0.003, 1e-12);
+  EXPECT_GT(tet_quality(r).min_dihedral_deg, 0.5 * tet_quality(t).min_dihedral_deg);
+  EXPECT_EQ(bisect_tets(t, std::vector<double>(t.tets.size(), -1.0)).tets.size(), t.tets.size());
+  EXPECT_THROW(bisect_tets(t, std::vector<double>(3, 1.0)), InternalError);
+}
+
 TEST(Tetrahedralize, AutoSizeShrinksWithFrequencyAndOrder) {
   const SurfaceMesh s = cube();  // 1 m: the wavelength bound, not the box bound, decides
   const Material steel = find_material("steel");

@@ -68,11 +68,12 @@ double refined_volume(const FemPass& f, double s) {
 // error, together holding the share theta of it that brings the worst mode to half the tolerance
 // once their edges shrink by s (capped at 0.9, so a few sweeps rather than one near-uniform one
 // reach a concentrated error), get s^3 times the bound they were meshed under: `level` (the
-// last bound of the region), or twice their volume where they are smaller (a thin wall). A
-// quality mesh's tetrahedra average 0.7 of their bound, so a bound of s^3 times each one's own
-// volume would follow its smallest neighbours (21x the tetrahedra for s = 1/2 on a box, against
-// 13x this way and 10x for uniform refinement). The rest get none.
-std::vector<double> local_bounds(const FemPass& f, double worst, double s, double level,
+// last bound of the region), or `own` times their volume where they are smaller (a thin wall).
+// For TetGen own = 2: a quality mesh's tetrahedra average 0.7 of their bound, so a bound of s^3
+// times each one's own volume would follow its smallest neighbours (21x the tetrahedra for
+// s = 1/2 on a box, against 13x this way and 10x for uniform refinement). Bisection, which
+// halves a tetrahedron only while it is over its bound, takes own = 1. The rest get none.
+std::vector<double> local_bounds(const FemPass& f, double worst, double s, double level, double own,
                                  const PrecomputeOptions& o) {
   const TetMesh& m = f.tets;
   const std::vector<double>& err = f.errors.element;
@@ -91,28 +92,35 @@ std::vector<double> local_bounds(const FemPass& f, double worst, double s, doubl
   double marked = 0;
   for (std::size_t e : order) {
     if (marked >= theta * total) break;
-    bound[e] = s * s * s * std::min(level, 2 * volume[e]);
+    bound[e] = s * s * s * std::min(level, own * volume[e]);
     marked += err[e];
   }
   return bound;
 }
 
-// The next mesh, refined by `s` where the error lies: locally (TetGen refining `best`'s mesh)
-// unless o.local_refinement is off or that fails, else the surface meshed again under one
-// smaller bound. r.max_tet_volume is `best`'s bound (after local refinement, its finest
-// region's); `meshed` receives the new one. Returns false, with the reason in r, when no mesh
-// can be made.
+// The next mesh, refined by `s` where the error lies: locally (TetGen refining `best`'s mesh,
+// or where TetGen fails, longest-edge bisection of the same tetrahedra) unless
+// o.local_refinement is off, else the surface meshed again under one smaller bound.
+// r.max_tet_volume is `best`'s bound (after local refinement, its finest region's); `meshed`
+// receives the new one. Returns false, with the reason in r, when no mesh can be made.
 bool next_mesh(const SurfaceMesh& surface, const FemPass& best, double worst, double s,
                const PrecomputeOptions& o, const Progress& p, TetOptions& topt, TetMesh& tets,
                double& meshed, PrecomputeReport& r) {
   if (o.local_refinement) {
+    meshed = s * s * s * r.max_tet_volume;
     try {
-      const double level = s * s * s * r.max_tet_volume;
-      tets = refine_tets(best.tets, local_bounds(best, worst, s, r.max_tet_volume, o), topt);
-      meshed = level;
+      tets = refine_tets(best.tets, local_bounds(best, worst, s, r.max_tet_volume, 2, o), topt);
       return true;
     } catch (const InputError& e) {
-      if (p.note) p.note(std::string("local refinement failed (") + e.what() + "); refining all");
+      if (p.note)
+        p.note(std::string("TetGen's local refinement failed (") + e.what() +
+               "); bisecting the marked tetrahedra instead");
+    }
+    try {
+      tets = bisect_tets(best.tets, local_bounds(best, worst, s, r.max_tet_volume, 1, o));
+      return true;
+    } catch (const InputError& e) {
+      if (p.note) p.note(std::string("bisection failed (") + e.what() + "); refining all");
     }
   }
   topt.max_volume = std::min(r.max_tet_volume, refined_volume(best, s));  // never coarser

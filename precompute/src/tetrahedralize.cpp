@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <numbers>
@@ -170,30 +171,6 @@ TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   return m;
 }
 
-// The tets' boundary faces, each oriented away from its tet's fourth vertex.
-std::vector<std::array<uint32_t, 3>> boundary_faces(const TetMesh& m) {
-  std::map<std::array<uint32_t, 3>, std::pair<int, std::array<uint32_t, 4>>> faces;
-  for (const auto& t : m.tets)
-    for (int skip = 0; skip < 4; ++skip) {
-      std::array<uint32_t, 4> f{t[(skip + 1) % 4], t[(skip + 2) % 4], t[(skip + 3) % 4], t[skip]};
-      std::array<uint32_t, 3> key{f[0], f[1], f[2]};
-      std::sort(key.begin(), key.end());
-      auto& e = faces[key];
-      e.first++, e.second = f;
-    }
-  std::vector<std::array<uint32_t, 3>> out;
-  for (const auto& [key, e] : faces) {
-    if (e.first != 1) continue;
-    const auto& f = e.second;
-    const Vec3 &a = m.nodes[f[0]], &b = m.nodes[f[1]], &c = m.nodes[f[2]], &d = m.nodes[f[3]];
-    if (dot(cross(sub(b, a), sub(c, a)), sub(d, a)) > 0)
-      out.push_back({f[0], f[2], f[1]});
-    else
-      out.push_back({f[0], f[1], f[2]});
-  }
-  return out;
-}
-
 // TetGen -r: refines an existing mesh under per-tetrahedron volume bounds (-a with no number
 // reads them from tetrahedronvolumelist; -1 leaves a tetrahedron unbounded). Without -Y the
 // boundary faces may be split, so a thin wall gets interior points near it.
@@ -239,6 +216,29 @@ TetMesh run_tetgen_refine(const TetMesh& m, const std::vector<double>& bound, co
 
 }  // namespace
 
+std::vector<std::array<uint32_t, 3>> boundary_faces(const TetMesh& m) {
+  std::map<std::array<uint32_t, 3>, std::pair<int, std::array<uint32_t, 4>>> faces;
+  for (const auto& t : m.tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      std::array<uint32_t, 4> f{t[(skip + 1) % 4], t[(skip + 2) % 4], t[(skip + 3) % 4], t[skip]};
+      std::array<uint32_t, 3> key{f[0], f[1], f[2]};
+      std::sort(key.begin(), key.end());
+      auto& e = faces[key];
+      e.first++, e.second = f;
+    }
+  std::vector<std::array<uint32_t, 3>> out;
+  for (const auto& [key, e] : faces) {
+    if (e.first != 1) continue;
+    const auto& f = e.second;
+    const Vec3 &a = m.nodes[f[0]], &b = m.nodes[f[1]], &c = m.nodes[f[2]], &d = m.nodes[f[3]];
+    if (dot(cross(sub(b, a), sub(c, a)), sub(d, a)) > 0)
+      out.push_back({f[0], f[2], f[1]});
+    else
+      out.push_back({f[0], f[1], f[2]});
+  }
+  return out;
+}
+
 TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
   // A regular tetrahedron of volume V has edges (6 sqrt(2) V)^(1/3).
   constexpr double kMaxTets = 2e7;
@@ -279,8 +279,11 @@ TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
   std::vector<double> bounds = max_volume;
   for (int attempt = 0;; ++attempt) {
     std::string crash;
-    if (auto m = tetgen_isolated([&] { return run_tetgen_refine(mesh, bounds, o); }, crash))
-      return std::move(*m);
+    auto job = [&] {
+      if (std::getenv("CHLADNI_TEST_TETGEN_ABORT_REFINE")) std::abort();  // tests: the fallback
+      return run_tetgen_refine(mesh, bounds, o);
+    };
+    if (auto m = tetgen_isolated(job, crash)) return std::move(*m);
     if (attempt == 2) throw InputError("TetGen failed refining the mesh (" + crash + ")");
     for (double& b : bounds) b *= 0.9;
   }

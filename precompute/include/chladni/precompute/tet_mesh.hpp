@@ -48,6 +48,15 @@ TetQuality tet_quality(const TetMesh& mesh);
 TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
                     const TetOptions& options);
 
+/// The same refinement by longest-edge bisection (Rivara), which cannot fail: every
+/// tetrahedron over its bound is halved at its longest edge, its neighbours along the edges cut
+/// as conformity asks, until each is within its bound. Without TetGen's quality bounds, the
+/// fallback when refine_tets throws. Nodes are kept as refine_tets keeps them.
+TetMesh bisect_tets(const TetMesh& mesh, const std::vector<double>& max_volume);
+
+/// The mesh's boundary faces (those of one tetrahedron), oriented outward.
+std::vector<std::array<uint32_t, 3>> boundary_faces(const TetMesh& mesh);
+
 /// Signed volume of tetrahedron `e` (positive for the orientation TetMesh keeps).
 inline double tet_volume(const TetMesh& m, std::size_t e) {
   const auto& t = m.tets[e];
