@@ -15,7 +15,6 @@
 #include <fstream>
 #include <numbers>
 #include <random>
-#include <thread>
 
 #include "chladni/core/error.hpp"
 #include "eigensolve_dense.hpp"
@@ -24,22 +23,6 @@
 
 namespace chladni::precompute {
 namespace {
-
-// A * X with the columns of X split over the cores (Eigen runs sparse * dense on one).
-Eigen::MatrixXd parallel_product(const SparseMatrix& A, const Eigen::MatrixXd& X) {
-  Eigen::MatrixXd Y(A.rows(), X.cols());
-  const int nt =
-      std::max(1, std::min<int>(int(std::thread::hardware_concurrency()), int(X.cols())));
-  std::vector<std::thread> pool;
-  for (int t = 0; t < nt; ++t) {
-    pool.emplace_back([&, t] {
-      const Eigen::Index lo = X.cols() * t / nt, hi = X.cols() * (t + 1) / nt;
-      Y.middleCols(lo, hi - lo).noalias() = A * X.middleCols(lo, hi - lo);
-    });
-  }
-  for (auto& th : pool) th.join();
-  return Y;
-}
 
 // Block Lanczos with full reorthogonalization on C (symmetric, eigenvalues theta > 0), for the
 // largest theta: the `want` largest, or (want = 0) all above theta_min. Spectra's Lanczos is
@@ -58,14 +41,22 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
   const Eigen::Index n = op.rows();
   max_dim = std::min<Eigen::Index>(max_dim, n) / b * b;
   Eigen::MatrixXd V(n, std::min<Eigen::Index>(max_dim, std::max<Eigen::Index>(4 * b, 3 * want)));
-  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(max_dim, max_dim);
+  // T grows with V: max_dim is a memory bound (thousands of columns), not the usual size.
+  Eigen::MatrixXd T = Eigen::MatrixXd::Zero(V.cols(), V.cols());
   std::mt19937 rng(12345);  // fixed: the same mesh gives the same modes
   std::normal_distribution<double> gauss;
   auto orthonormalize = [&](Eigen::MatrixXd& W, Eigen::Index k, Eigen::MatrixXd& R) {
-    // Two passes of block Gram-Schmidt against V[:, 0:k], then a thin QR; columns that vanish
-    // (an invariant subspace was found) are replaced by fresh random directions.
-    for (int pass = 0; pass < 2 && k > 0; ++pass)
+    // Block classical Gram-Schmidt against V[:, 0:k], then a thin QR; columns that vanish (an
+    // invariant subspace was found) are replaced by fresh random directions. The caller has
+    // taken out the three-term recurrence, so what is left along the basis is round-off and one
+    // pass removes it; a second runs only where a column lost more than 1/sqrt 2 of its norm
+    // (the DGKS test, as in ARPACK's dsaitr). Each pass reads the whole basis twice, the cost
+    // of the iteration after the solves.
+    for (int pass = 0; pass < 2 && k > 0; ++pass) {
+      const Eigen::RowVectorXd before = W.colwise().norm();
       W.noalias() -= V.leftCols(k) * (V.leftCols(k).transpose() * W);
+      if ((W.colwise().norm().array() >= std::sqrt(0.5) * before.array()).all()) break;
+    }
     Eigen::HouseholderQR<Eigen::MatrixXd> qr(W);
     R = qr.matrixQR().topRows(W.cols()).triangularView<Eigen::Upper>();
     Eigen::MatrixXd Q = qr.householderQ() * Eigen::MatrixXd::Identity(W.rows(), W.cols());
@@ -96,6 +87,9 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
     out.applied += std::size_t(b);
     const Eigen::MatrixXd A = V.middleCols(j0, b).transpose() * W;
     T.block(j0, j0, b, b) = 0.5 * (A + A.transpose());
+    // The three-term recurrence: W = C V_j - V_j A_j - V_{j-1} B_{j-1}^T.
+    W.noalias() -= V.middleCols(j0, b) * T.block(j0, j0, b, b);
+    if (j0 >= b) W.noalias() -= V.middleCols(j0 - b, b) * T.block(j0 - b, j0, b, b);
     // Ritz pairs of the current projection; residual of pair i is ||B_next S(last block, i)||,
     // with B_next from the next orthonormalization.
     const bool full = k + b > max_dim;
@@ -125,7 +119,11 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
       out.Y = V.leftCols(k) * S.leftCols(wanted);
       return out;
     }
-    if (k + b > V.cols()) V.conservativeResize(n, std::min<Eigen::Index>(max_dim, 2 * V.cols()));
+    if (k + b > V.cols()) {
+      const Eigen::Index cols = std::min<Eigen::Index>(max_dim, 2 * V.cols());
+      V.conservativeResize(n, cols);
+      T.conservativeResizeLike(Eigen::MatrixXd::Zero(cols, cols));
+    }
     V.middleCols(k, b) = W;
     T.block(k, j0, b, b) = R;
     T.block(j0, k, b, b) = R.transpose();
@@ -209,7 +207,9 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
   if (o.method == EigenOptions::Method::BlockLanczos) {
     const double theta_min = 1.0 / (lambda_max - sigma);
     const BlockLanczosResult bl =
-        block_lanczos(op, o.modes > 0 ? nev : 0, theta_min, o.tolerance, max_dim, o.block, status);
+        block_lanczos(op, o.modes > 0 ? nev : 0, theta_min,
+                      getenv("EXP_TOL") ? atof(getenv("EXP_TOL")) : o.tolerance, max_dim,
+                      getenv("EXP_B") ? atoi(getenv("EXP_B")) : o.block, status);
     r.solves = 1;
     r.operations = bl.applied;
     if (!bl.converged) {
@@ -306,7 +306,8 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   const Eigen::MatrixXd MQ = llt.matrixL().solve(MR.transpose()).transpose();  // M Q
 
   // M-normalize, and classify rigid modes by their M-weighted overlap with the rigid motions.
-  Eigen::MatrixXd Mv = parallel_product(M, evecs);
+  Eigen::MatrixXd Mv;
+  symmetric_product(M, evecs, Mv);
   std::vector<Eigen::Index> elastic;
   for (Eigen::Index j = 0; j < evals.size(); ++j) {
     const double mnorm = std::sqrt(evecs.col(j).dot(Mv.col(j)));
@@ -355,7 +356,8 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   }
   evecs.resize(0, 0);
   Mv.resize(0, 0);
-  const Eigen::MatrixXd Kv = parallel_product(K, r.vectors);
+  Eigen::MatrixXd Kv;
+  symmetric_product(K, r.vectors, Kv);
   for (std::size_t i = 0; i < r.lambda.size(); ++i) {
     const auto c = Eigen::Index(i);
     r.residual.push_back((Kv.col(c) - r.lambda[i] * Mk.col(c)).norm() / Kv.col(c).norm());

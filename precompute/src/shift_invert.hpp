@@ -4,10 +4,12 @@
 #include <Eigen/SparseCholesky>
 #include <chrono>
 #include <string>
+#include <type_traits>
 
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/fem.hpp"
 #include "cholmod_factor.hpp"  // FactorEstimate in every build; CholmodFactor with CHOLMOD
+#include "symmetric_product.hpp"
 
 namespace chladni::precompute {
 
@@ -112,15 +114,22 @@ class SplitShiftInvert {
   void apply(Dense& X) const {
     const auto t0 = std::chrono::steady_clock::now();
     factor_.upper_solve(X);
-    Dense MX = M_ * X;
-    factor_.lower_solve(MX);
-    X = std::move(MX);
+    if constexpr (std::is_same_v<Dense, Eigen::MatrixXd>) {
+      symmetric_product(M_, X, mx_);
+      factor_.lower_solve(mx_);
+      X.swap(mx_);
+    } else {
+      Dense MX = M_ * X;
+      factor_.lower_solve(MX);
+      X = std::move(MX);
+    }
     solve_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   }
   const SparseMatrix& K_;
   const SparseMatrix& M_;
   mutable Factor factor_;  // CHOLMOD's workspace changes during solves
   mutable Eigen::VectorXd w_;
+  mutable Eigen::MatrixXd mx_;  // M X for a block, kept between applications
 };
 
 }  // namespace chladni::precompute
