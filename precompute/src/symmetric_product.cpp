@@ -43,7 +43,9 @@ void symmetric_product(const SparseMatrix& A, const Eigen::MatrixXd& X, Eigen::M
     x = X.middleCols(c0, b);
     y.resize(n, b);
     auto work = [&](Eigen::Index lo, Eigen::Index hi) {
-      if (b == 8)
+      if (b == 16)  // whole chunks of a wide X
+        rows<16>(A, x.data(), y.data(), b, lo, hi);
+      else if (b == 8)  // the eigen-solve's blocks
         rows<8>(A, x.data(), y.data(), b, lo, hi);
       else
         rows<0>(A, x.data(), y.data(), b, lo, hi);
