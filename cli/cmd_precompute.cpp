@@ -276,7 +276,8 @@ void add_precompute(CLI::App& app, bool run) {
       ->check(CLI::IsMember({"local", "uniform"}))
       ->capture_default_str();
   cmd->add_option("--max-memory", a->max_memory_gb,
-                  "Memory the eigen-solve's factor and basis may take (GB; 0: no limit; default "
+                  "Memory the eigen-solve's factor, matrices and basis may take (GB; 0: no limit; "
+                  "default "
                   "80 % of the memory available): larger problems are refused before the "
                   "factorization, with what they would need")
       ->check(finite_in(0, 1e6));

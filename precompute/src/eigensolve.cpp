@@ -136,23 +136,41 @@ std::string gigabytes(double bytes) {
   return buf;
 }
 
-// Block Lanczos basis: n x dim doubles, within 4 GB and what the factor leaves of the budget.
-Eigen::Index lanczos_dim(Eigen::Index n, double factor_bytes, const EigenOptions& o) {
-  const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
-  const double basis_cap = o.max_memory > 0 ? std::min(4e9, o.max_memory - factor_bytes) : 4e9;
-  const Eigen::Index want_dim = std::max<Eigen::Index>(o.block * 4, 3 * max_nev + 64);
-  return std::max<Eigen::Index>(
-      o.block * 4, std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n)))));
+// Bytes per stored entry of K besides the factor: K and M (a double and an int each), K - sigma
+// M while it is factorized (the same), CHOLMOD's long-index copy of its pattern and the
+// transposed copy CHOLMOD's factorization makes (a double and a long).
+constexpr double kMatrixBytesPerEntry = 12 + 12 + 12 + 8 + 16;
+
+// The smallest basis worth factorizing for: modes asked for converge in about 3.3 vectors per
+// mode (352 for spot.obj's 106), so 4 per mode and two blocks; a band search may stop short
+// (capped) instead.
+Eigen::Index lanczos_floor(Eigen::Index n, const EigenOptions& o) {
+  if (o.modes > 0) return std::min<Eigen::Index>(n, 4 * (Eigen::Index(o.modes) + 6) + 2 * o.block);
+  return o.block * 4;
 }
 
-void check_budget(Eigen::Index n, const FactorEstimate& est, double basis_bytes,
-                  const EigenOptions& o, const std::string& how) {
-  if (o.max_memory <= 0 || est.bytes + basis_bytes <= o.max_memory) return;
-  throw BudgetError("the eigen-solve would need about " + gigabytes(est.bytes + basis_bytes) +
+// Block Lanczos basis: n x dim doubles, room for 3 vectors per mode of the cap within 4 GB and
+// what the factor and the matrices leave of the budget, but never below lanczos_floor (the
+// budget check refuses that case).
+Eigen::Index lanczos_dim(Eigen::Index n, double reserved_bytes, const EigenOptions& o) {
+  const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
+  const double basis_cap = o.max_memory > 0 ? std::min(4e9, o.max_memory - reserved_bytes) : 4e9;
+  const Eigen::Index want_dim = std::max<Eigen::Index>(o.block * 4, 3 * max_nev + 64);
+  return std::max<Eigen::Index>(
+      lanczos_floor(n, o),
+      std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n)))));
+}
+
+void check_budget(Eigen::Index n, const FactorEstimate& est, double matrix_bytes,
+                  double basis_bytes, const EigenOptions& o, const std::string& how) {
+  const double need = est.bytes + matrix_bytes + basis_bytes;
+  if (o.max_memory <= 0 || need <= o.max_memory) return;
+  throw BudgetError("the eigen-solve would need about " + gigabytes(need) +
                     " (the sparse factor of K - sigma M for " + std::to_string(n) + " DOFs: " +
                     gigabytes(est.bytes) + ", nnz(L) " + std::to_string(std::llround(est.entries)) +
                     ", " + std::to_string(std::llround(est.flops / 1e9)) +
-                    " GFLOP; the Lanczos basis: " + gigabytes(basis_bytes) + how +
+                    " GFLOP; the matrices and their copies: " + gigabytes(matrix_bytes) +
+                    "; the Lanczos basis: " + gigabytes(basis_bytes) + how +
                     "), more than the memory budget of " + gigabytes(o.max_memory) +
                     ": raise --max-tet-volume (coarser elements), lower --max-freq or "
                     "--max-modes, or raise --max-memory");
@@ -178,7 +196,8 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
                      std::to_string(o.mode_cap) + " is lower)");
   const FactorEstimate est = op.analyze();
   r.factor_entries = est.entries, r.factor_bytes = est.bytes, r.factor_flops = est.flops;
-  const Eigen::Index max_dim = lanczos_dim(n, est.bytes, o);
+  const double matrix_bytes = kMatrixBytesPerEntry * double(K.nonZeros());
+  const Eigen::Index max_dim = lanczos_dim(n, est.bytes + matrix_bytes, o);
   r.basis_bytes = 8.0 * double(n) *
                   double(o.method == EigenOptions::Method::BlockLanczos
                              ? max_dim
@@ -187,7 +206,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
     status("factor: " + gigabytes(est.bytes) + " (nnz(L) " +
            std::to_string(std::llround(est.entries)) + ", " +
            std::to_string(std::llround(est.flops / 1e9)) + " GFLOP)");
-  check_budget(n, est, r.basis_bytes, o, "");
+  check_budget(n, est, matrix_bytes, r.basis_bytes, o, "");
   // Round-off on a badly shaped mesh can make K - sigma M indefinite along the rigid motions
   // when |sigma| is tiny next to K's scale: move the shift further down and retry.
   for (int attempt = 0;; ++attempt) {
@@ -386,9 +405,10 @@ double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o) {
   if (est.bytes <= 0) return 0;  // this build's factorization cannot say before factorizing
   est.entries *= 9, est.bytes *= 9, est.flops *= 27;
   const Eigen::Index n = Eigen::Index(mesh.dofs());
-  const double basis = 8.0 * double(n) * double(lanczos_dim(n, est.bytes, o));
-  check_budget(n, est, basis, o, "; estimated from the mesh before assembly");
-  return est.bytes + basis;
+  const double matrices = kMatrixBytesPerEntry * 9.0 * double(G.nonZeros());
+  const double basis = 8.0 * double(n) * double(lanczos_dim(n, est.bytes + matrices, o));
+  check_budget(n, est, matrices, basis, o, "; estimated from the mesh before assembly");
+  return est.bytes + matrices + basis;
 }
 
 }  // namespace chladni::precompute

@@ -21,9 +21,10 @@ struct EigenOptions {
   enum class Method { BlockLanczos, Spectra };
   Method method = Method::BlockLanczos;
   Eigen::Index block = 8;
-  /// Bytes the factor and the Lanczos basis may take together; 0: no limit. The symbolic
-  /// analysis says what the factor needs before any of it is allocated; above the budget
-  /// solve_modes refuses (InputError) with the numbers.
+  /// Bytes the factor, K and M with the copies the factorization makes, and the Lanczos basis
+  /// may take together; 0: no limit. The symbolic analysis says what the factor needs before
+  /// any of it is allocated; above the budget solve_modes refuses (BudgetError) with the
+  /// numbers.
   double max_memory = 0;
 };
 

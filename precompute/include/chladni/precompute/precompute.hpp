@@ -40,7 +40,8 @@ struct PrecomputeOptions {
   int threads = 0;
   std::size_t mode_cap = 2000;
   EigenOptions::Method eigensolver = EigenOptions::Method::BlockLanczos;
-  /// Bytes the eigen-solve's factor and basis may take (EigenOptions::max_memory); 0: no limit;
+  /// Bytes the eigen-solve's factor, matrices and basis may take (EigenOptions::max_memory);
+  /// 0: no limit;
   /// negative: default_memory_budget().
   double max_memory = -1;
   bool transfer = true;  ///< fit acoustic transfer per mode (XFER)
