@@ -73,6 +73,7 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                 {"factor_nonzeros", r.eigen.factor_entries},
                 {"factor_bytes", r.eigen.factor_bytes},
                 {"factor_flops", r.eigen.factor_flops},
+                {"matrix_bytes", r.eigen.matrix_bytes},
                 {"basis_bytes", r.eigen.basis_bytes}};
   j["modes"] = {{"kept", r.kept},
                 {"overdamped", r.overdamped},

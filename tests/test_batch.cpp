@@ -299,15 +299,15 @@ TEST(BatchCli, AssetOverItsShareIsRetriedAlone) {
   const fs::path d = fresh_dir("memory");
   write_box(d / "a.obj", 0.1, 0.12, 0.14);
   write_box(d / "b.obj", 0.1, 0.12, 0.14001);
-  // The sparse factor's size from a plain precompute's summary (the Lanczos basis adapts to
-  // what the budget leaves).
+  // What the eigen-solve needs besides the Lanczos basis, from a plain precompute's summary
+  // (the basis adapts to what the budget leaves).
   chladni::test::CliResult r =
       run_cli("precompute " + (d / "a.obj").string() + " -o " + (d / "probe.chbank").string() +
               " --max-modes 4 --no-transfer --max-tet-volume 5e-6 -q --json " +
               (d / "probe.json").string());
   ASSERT_EQ(r.code, 0) << r.output;
   const nlohmann::json probe = read_json(d / "probe.json")["eigen"];
-  const double need = probe["factor_bytes"].get<double>();
+  const double need = probe["factor_bytes"].get<double>() + probe["matrix_bytes"].get<double>();
   ASSERT_GT(need, 0);
   r = run_cli("precompute " + (d / "a.obj").string() + " -o " + (d / "p2.chbank").string() +
               " --max-modes 4 --no-transfer --max-tet-volume 5e-6 -q --max-memory " +
@@ -325,6 +325,18 @@ TEST(BatchCli, AssetOverItsShareIsRetriedAlone) {
   const auto st = statuses(d / "batch-summary.json");
   EXPECT_EQ(st.at("a"), "ok");
   EXPECT_EQ(st.at("b"), "ok");
+  // Over budget even alone: reported once, not retried again (the batch ends).
+  fs::remove(d / "a.chbank"), fs::remove(d / "b.chbank");
+  r = run_cli("batch " + (d / "m.json").string() + " -j 2 --max-memory " +
+              std::to_string(0.6 * need / 1e9));
+  EXPECT_NE(r.code, 0) << r.output;
+  const auto over = statuses(d / "batch-summary.json");
+  EXPECT_NE(over.at("a"), "ok");
+  EXPECT_NE(over.at("b"), "ok");
+  std::size_t retries = 0;
+  for (std::size_t p = 0; (p = r.output.find("will retry alone", p)) != std::string::npos; ++p)
+    ++retries;
+  EXPECT_EQ(retries, 2u) << r.output;
 }
 
 #ifdef CHLADNI_MPIEXEC

@@ -243,8 +243,7 @@ TEST(CliPrecompute, MemoryBudgetRefusesBeforeTheFactorization) {
   // the basis alone would fit in 60 MB.
   r = run("precompute " + bar + " -o " + out + " --max-modes 6 --max-memory 0.06");
   EXPECT_EQ(r.code, 3) << r.output;
-  EXPECT_NE(r.output.find("the matrices and their copies: 0.07 GB"), std::string::npos)
-      << r.output;
+  EXPECT_NE(r.output.find("the matrices and their copies: 0.07 GB"), std::string::npos) << r.output;
   // The boundary-element transfer is held to the same budget: the eigen-solve (linear
   // elements: about 10 MB) fits in 50 MB, the BEM system on the bar's own 1,968 triangles
   // (about 100 MB) does not.

@@ -156,9 +156,10 @@ Eigen::Index lanczos_dim(Eigen::Index n, double reserved_bytes, const EigenOptio
   const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
   const double basis_cap = o.max_memory > 0 ? std::min(4e9, o.max_memory - reserved_bytes) : 4e9;
   const Eigen::Index want_dim = std::max<Eigen::Index>(o.block * 4, 3 * max_nev + 64);
-  return std::max<Eigen::Index>(
-      lanczos_floor(n, o),
-      std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n)))));
+  return std::min<Eigen::Index>(
+      n, std::max<Eigen::Index>(
+             lanczos_floor(n, o),
+             std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n))))));
 }
 
 void check_budget(Eigen::Index n, const FactorEstimate& est, double matrix_bytes,
@@ -197,6 +198,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
   const FactorEstimate est = op.analyze();
   r.factor_entries = est.entries, r.factor_bytes = est.bytes, r.factor_flops = est.flops;
   const double matrix_bytes = kMatrixBytesPerEntry * double(K.nonZeros());
+  r.matrix_bytes = matrix_bytes;
   const Eigen::Index max_dim = lanczos_dim(n, est.bytes + matrix_bytes, o);
   r.basis_bytes = 8.0 * double(n) *
                   double(o.method == EigenOptions::Method::BlockLanczos

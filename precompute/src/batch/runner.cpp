@@ -68,7 +68,7 @@ Plan make_plan(const Manifest& m, const RunOptions& o, std::vector<Result>& resu
 }
 
 Runner::Runner(const Manifest& m, const RunOptions& o, const Plan& plan, int share)
-    : m_(m), o_(o), plan_(plan), log_dir_(log_folder(m, o)) {
+    : m_(m), o_(o), plan_(plan), log_dir_(log_folder(m, o)), ran_alone_(m.assets.size(), false) {
   share = std::max(1, share);
   budget_ = (o.memory_budget < 0 ? default_memory_budget() : o.memory_budget) / share;
   cores_ = std::max(1, int(std::thread::hardware_concurrency()) / share);
@@ -87,6 +87,7 @@ void Runner::start(std::size_t asset, bool alone) {
   children_.push_back(
       start_child(o_, log_dir_, m_.assets[asset], asset, plan_.stamps[asset], memory, threads));
   children_.back().alone = alone;
+  if (alone) ran_alone_[asset] = true;
 }
 
 std::vector<std::pair<std::size_t, Result>> Runner::reap(bool block) {
@@ -107,7 +108,7 @@ std::vector<std::pair<std::size_t, Result>> Runner::reap(bool block) {
 bool Runner::requeue_alone(std::size_t asset, const Result& r,
                            std::deque<std::size_t>& alone) const {
   if (r.status != Status::OverBudget || std::max(1, o_.jobs) <= 1 ||
-      m_.assets[asset].has_option("--max-memory"))
+      m_.assets[asset].has_option("--max-memory") || ran_alone_[asset])
     return false;
   if (o_.print) o_.print("over budget " + r.name + ": will retry alone at the end");
   alone.push_back(asset);

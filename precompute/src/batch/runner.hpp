@@ -34,7 +34,7 @@ class Runner {
   /// Results of children that ended; waits for one when `block` and some are running.
   std::vector<std::pair<std::size_t, Result>> reap(bool block);
   /// Queues `asset` on `alone` (and says so) when `r` is a refusal for memory that the whole
-  /// budget, with nothing beside it, may cure.
+  /// budget, with nothing beside it, may cure: never for an asset that already ran alone.
   bool requeue_alone(std::size_t asset, const Result& r, std::deque<std::size_t>& alone) const;
 
  private:
@@ -45,6 +45,7 @@ class Runner {
   double budget_ = 0;
   int cores_ = 1;
   std::vector<Child> children_;
+  std::vector<bool> ran_alone_;  ///< per asset
 };
 
 /// Progress lines with an ETA from the mesh sizes done and left.
