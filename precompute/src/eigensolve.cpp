@@ -228,9 +228,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
   if (o.method == EigenOptions::Method::BlockLanczos) {
     const double theta_min = 1.0 / (lambda_max - sigma);
     const BlockLanczosResult bl =
-        block_lanczos(op, o.modes > 0 ? nev : 0, theta_min,
-                      getenv("EXP_TOL") ? atof(getenv("EXP_TOL")) : o.tolerance, max_dim,
-                      getenv("EXP_B") ? atoi(getenv("EXP_B")) : o.block, status);
+        block_lanczos(op, o.modes > 0 ? nev : 0, theta_min, o.tolerance, max_dim, o.block, status);
     r.solves = 1;
     r.operations = bl.applied;
     if (!bl.converged) {
