@@ -88,7 +88,6 @@ struct Bisector {
 TetMesh bisect_tets(const TetMesh& mesh, const std::vector<double>& max_volume) {
   if (max_volume.size() != mesh.tets.size())
     throw InternalError("bisect_tets: one volume bound per tetrahedron expected");
-  constexpr std::size_t kMaxTets = 20'000'000;  // as tetrahedralize
   Bisector b{mesh.nodes, {}, {}};
   std::vector<Tet> tets = mesh.tets;
   std::vector<double> bounds = max_volume;
@@ -116,8 +115,8 @@ TetMesh bisect_tets(const TetMesh& mesh, const std::vector<double>& max_volume) 
     next.reserve(tets.size() + 2 * b.marked.size());
     next_bounds.reserve(next.capacity());
     for (std::size_t t = 0; t < tets.size(); ++t) b.split(tets[t], bounds[t], next, next_bounds);
-    if (next.size() > kMaxTets)
-      throw InputError("bisecting the mesh would make more than " + std::to_string(kMaxTets) +
+    if (next.size() > kMaxTetrahedra)
+      throw InputError("bisecting the mesh would make more than " + std::to_string(kMaxTetrahedra) +
                        " tetrahedra");
     tets.swap(next);
     bounds.swap(next_bounds);

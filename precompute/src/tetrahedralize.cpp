@@ -241,9 +241,8 @@ std::vector<std::array<uint32_t, 3>> boundary_faces(const TetMesh& m) {
 
 TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
   // A regular tetrahedron of volume V has edges (6 sqrt(2) V)^(1/3).
-  constexpr double kMaxTets = 2e7;
   const double volume = enclosed_volume(input);
-  if (o.max_volume > 0 && volume / o.max_volume > kMaxTets) {
+  if (o.max_volume > 0 && volume / o.max_volume > double(kMaxTetrahedra)) {
     char buf[160];
     std::snprintf(buf, sizeof buf,
                   "tetrahedra of at most %.3g m^3 would fill this %.3g m^3 solid "

@@ -34,6 +34,9 @@ struct TetQuality {
   double volume = 0;            ///< total, m^3
 };
 
+/// The most tetrahedra this tool makes (meshing and refinement refuse beyond it).
+inline constexpr std::size_t kMaxTetrahedra = 20'000'000;
+
 /// Quality tetrahedralization of a valid closed surface. Throws InputError with TetGen's reason
 /// when it refuses the surface.
 TetMesh tetrahedralize(const SurfaceMesh& surface, const TetOptions& options);
