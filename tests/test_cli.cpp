@@ -260,6 +260,22 @@ TEST(CliPrecompute, MemoryBudgetRefusesBeforeTheFactorization) {
   EXPECT_NE(r.output.find("--max-memory"), std::string::npos) << r.output;
 }
 
+// Every mode below 20 kHz of Spot as shipped (1.7 m) would need a mesh of about 600,000
+// tetrahedra, minutes of meshing, and a factor far over the budget: refused from coarser meshes
+// before that meshing, with the lower bound, how many modes the band holds, and the output kept.
+TEST(CliPrecompute, MemoryBudgetRefusesBeforeMeshing) {
+  const std::string out = chladni::test::write_temp("chladni_budget_mesh.chbank", "keep");
+  Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/spot.obj -o " + out + " --max-memory 4");
+  EXPECT_EQ(r.code, 3) << r.output;
+  EXPECT_NE(r.output.find("the eigen-solve would need at least"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("a lower bound found before meshing"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("modes lie below 20000 Hz: ask for the first N with --max-modes"),
+            std::string::npos)
+      << r.output;
+  EXPECT_EQ(r.output.find("[4] assemble"), std::string::npos) << r.output;
+  EXPECT_EQ(chladni::test::read_file(out), "keep");
+}
+
 // Outputs are checked before the work that fills them, and replaced atomically: a bad path
 // fails at once with exit 2 and leaves what was there; a good run leaves no temporaries behind.
 TEST(CliOutputs, CheckedFirstAndReplacedAtomically) {

@@ -334,6 +334,61 @@ TEST(Tetrahedralize, BisectTetsMeetsTheBoundsConformingAndKeepsTheNodes) {
   EXPECT_THROW(bisect_tets(t, std::vector<double>(3, 1.0)), InternalError);
 }
 
+// Where TetGen's -Y (the input's triangles kept as the boundary) leaves flat tetrahedra, the
+// solid is meshed again with points added on the surface: a better worst angle, the input's
+// vertices first and in order, then the added surface points, each on an input triangle, and a
+// boundary that is closed, outward and encloses the same volume.
+TEST(Tetrahedralize, FlatMeshesAreMadeAgainWithPointsOnTheSurface) {
+  const SurfaceMesh s = read_mesh(kMeshes + "/rotor.obj");
+  TetOptions o;
+  o.max_volume = coarse_max_volume(s);
+  const TetMesh kept = tetrahedralize(s, o);
+  const double worst = tet_quality(kept).min_dihedral_deg;
+  ASSERT_LT(worst, 1.0);  // the rotor's own triangles force slivers
+  o.flat_dihedral_deg = 1.0;
+  const TetMesh t = tetrahedralize(s, o);
+  const TetQuality q = tet_quality(t);
+  EXPECT_GT(q.min_dihedral_deg, worst);
+  // TetGen merges nearly coplanar input triangles into one facet and places points on it: all
+  // but one of the rotor's within 1e-6 of its size of the surface, that one 1.2e-5.
+  EXPECT_NEAR(q.volume, tet_quality(kept).volume, 1e-6 * q.volume);
+  // The input, as split to the bound, first.
+  ASSERT_GT(t.surface_vertices, kept.surface_vertices);
+  for (std::size_t v = 0; v < kept.surface_vertices; ++v) ASSERT_EQ(t.nodes[v], kept.nodes[v]);
+  // The surface triangles are the boundary faces, over exactly the first surface_vertices nodes.
+  auto sorted = [](std::vector<std::array<uint32_t, 3>> f) {
+    for (auto& x : f) std::sort(x.begin(), x.end());
+    std::sort(f.begin(), f.end());
+    return f;
+  };
+  EXPECT_EQ(sorted(t.surface_triangles), sorted(boundary_faces(t)));
+  std::vector<bool> on_surface(t.nodes.size(), false);
+  for (const auto& f : t.surface_triangles)
+    for (uint32_t v : f) on_surface[v] = true;
+  for (std::size_t v = 0; v < t.nodes.size(); ++v)
+    ASSERT_EQ(on_surface[v], v < t.surface_vertices) << v;
+  // Closed and outward: the divergence theorem gives the volume back.
+  double divergence = 0;
+  for (const auto& f : t.surface_triangles)
+    divergence += dot(t.nodes[f[0]], cross(t.nodes[f[1]], t.nodes[f[2]])) / 6;
+  EXPECT_NEAR(divergence, q.volume, 1e-9 * q.volume);
+  // Each added point lies on an input triangle (to TetGen's facet merging, above).
+  const double size = std::cbrt(q.volume);
+  for (std::size_t v = kept.surface_vertices; v < t.surface_vertices; ++v) {
+    double nearest = INFINITY;
+    for (const auto& f : s.triangles) {
+      const Vec3 a = s.vertices[f[0]], e1 = sub(s.vertices[f[1]], a), e2 = sub(s.vertices[f[2]], a);
+      const Vec3 n = cross(e1, e2), d = sub(t.nodes[v], a);
+      const double nn = dot(n, n);
+      const double b1 = dot(cross(d, e2), n) / nn, b2 = dot(cross(e1, d), n) / nn;
+      if (b1 >= -1e-6 && b2 >= -1e-6 && b1 + b2 <= 1 + 1e-6)
+        nearest = std::min(nearest, std::abs(dot(d, n)) / std::sqrt(nn));
+    }
+    const bool found = nearest < 1e-4 * size;
+    ASSERT_TRUE(found) << "added surface point " << v << " is " << nearest / size << " off";
+  }
+}
+
 TEST(Tetrahedralize, AutoSizeShrinksWithFrequencyAndOrder) {
   const SurfaceMesh s = cube();  // 1 m: the wavelength bound, not the box bound, decides
   const Material steel = find_material("steel");

@@ -262,3 +262,23 @@ TEST(ModalFem, CoarseSurfaceBoxMatchesFineSurfaceBox) {
   for (std::size_t i = 0; i < 8; ++i)
     EXPECT_NEAR(coarse.omega[i] / fine.omega[i], 1.0, 0.01) << "mode " << i;
 }
+
+// The memory figure found before meshing, from coarser meshes, is a lower bound on the one the
+// mesh itself gives (so a refusal before meshing never refuses what would fit), and not a
+// vacuous one: a solid box, a thin shell and Spot.
+TEST(ModalFem, MemoryBeforeMeshingIsALowerBound) {
+  EigenOptions eo;
+  eo.max_memory = 1e15;         // report, never refuse
+  eo.modes = eo.mode_cap = 20;  // a small basis: the factor and the matrices decide
+  for (const char* name : {"bar.obj", "bowl.obj", "spot.obj"}) {
+    const SurfaceMesh s = read_mesh(kMeshes + "/" + name);
+    TetOptions o;
+    o.max_volume = coarse_max_volume(s) / 40;
+    const double lower =
+        check_memory_before_meshing(s, std::abs(check_mesh(s).volume), o.max_volume, 2, o, eo);
+    const double exact = check_eigen_memory(make_fem_mesh(tetrahedralize(s, o), 2), eo);
+    EXPECT_GT(lower, 0) << name;
+    EXPECT_LE(lower, exact) << name;
+    EXPECT_GT(lower, exact / 5) << name;  // measured: 0.31, 1 and 0.91 of it
+  }
+}

@@ -9,6 +9,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -163,10 +164,11 @@ Eigen::Index lanczos_dim(Eigen::Index n, double reserved_bytes, const EigenOptio
 }
 
 void check_budget(Eigen::Index n, const FactorEstimate& est, double matrix_bytes,
-                  double basis_bytes, const EigenOptions& o, const std::string& how) {
+                  double basis_bytes, const EigenOptions& o, const std::string& how,
+                  const char* amount = "about ") {
   const double need = est.bytes + matrix_bytes + basis_bytes;
   if (o.max_memory <= 0 || need <= o.max_memory) return;
-  throw BudgetError("the eigen-solve would need about " + gigabytes(need) +
+  throw BudgetError("the eigen-solve would need " + std::string(amount) + gigabytes(need) +
                     " (the sparse factor of K - sigma M for " + std::to_string(n) + " DOFs: " +
                     gigabytes(est.bytes) + ", nnz(L) " + std::to_string(std::llround(est.entries)) +
                     ", " + std::to_string(std::llround(est.flops / 1e9)) +
@@ -384,10 +386,12 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   return r;
 }
 
-double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o) {
-  if (o.max_memory <= 0) return 0;
-  // The node graph: each element couples all its nodes. K's pattern is this graph with each
-  // entry a 3 x 3 block, so its factor has 9 times the entries and 27 times the flops.
+namespace {
+
+// CHOLMOD's analysis of the node graph, where each element couples all its nodes. K's pattern is
+// this graph with each entry a 3 x 3 block, so its factor has 9 times the entries and 27 times
+// the flops. `matrices` receives the bytes of K, M and their copies.
+FactorEstimate node_graph_estimate(const FemMesh& mesh, double& matrices) {
   const int npe = mesh.nodes_per_element();
   std::vector<Eigen::Triplet<double, int>> t;
   t.reserve(mesh.element_count() * std::size_t(npe * npe));
@@ -402,12 +406,57 @@ double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o) {
   t = {};
   Factor f;
   FactorEstimate est = f.analyze(G);
-  if (est.bytes <= 0) return 0;  // this build's factorization cannot say before factorizing
   est.entries *= 9, est.bytes *= 9, est.flops *= 27;
+  matrices = kMatrixBytesPerEntry * 9.0 * double(G.nonZeros());
+  return est;
+}
+
+}  // namespace
+
+double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o) {
+  if (o.max_memory <= 0) return 0;
+  double matrices = 0;
+  const FactorEstimate est = node_graph_estimate(mesh, matrices);
+  if (est.bytes <= 0) return 0;  // this build's factorization cannot say before factorizing
   const Eigen::Index n = Eigen::Index(mesh.dofs());
-  const double matrices = kMatrixBytesPerEntry * 9.0 * double(G.nonZeros());
   const double basis = 8.0 * double(n) * double(lanczos_dim(n, est.bytes + matrices, o));
   check_budget(n, est, matrices, basis, o, "; estimated from the mesh before assembly");
+  return est.bytes + matrices + basis;
+}
+
+double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& sample,
+                                         double tetrahedra, const EigenOptions& o) {
+  if (o.max_memory <= 0) return 0;
+  // DOFs per tetrahedron, at most what a large quality mesh has (P2: 1.32 nodes per tetrahedron
+  // from Euler's formula with about 6.3 tetrahedra per vertex, so 3.95 DOFs; P1: 0.48) and never
+  // above the sample's own, where the surface's share is larger.
+  const double ns = double(sample.dofs());
+  const bool p2 = sample.nodes_per_element() == 10;
+  const double n =
+      std::max(ns, std::min(p2 ? 3.6 : 0.4, ns / double(sample.element_count())) * tetrahedra);
+  double matrices = 0, coarse_matrices = 0;
+  FactorEstimate est = node_graph_estimate(sample, matrices);
+  const FactorEstimate low = node_graph_estimate(coarse, coarse_matrices);
+  if (est.bytes <= 0 || low.bytes <= 0) return 0;
+  // Nested dissection's factor grows as n^(4/3) in a solid and n log n in a shell, and a thin
+  // part grows faster once its thickness is resolved: the growth between the two meshes,
+  // within [1, 4/3] (flops [1, 2]), extrapolated from the finer one can only underestimate.
+  // Where the two are alike (a surface that decides the mesh), only the floors are known.
+  const double r = std::log(n / ns), rs = std::log(ns / double(coarse.dofs()));
+  const bool grew = rs > 0.05;
+  const double a =
+      grew ? std::clamp(std::log(est.entries / low.entries) / rs, 1.0, 4.0 / 3.0) : 1.0;
+  const double af = grew ? std::clamp(std::log(est.flops / low.flops) / rs, 1.0, 2.0) : 1.0;
+  est.entries *= std::exp(a * r), est.bytes *= std::exp(a * r), est.flops *= std::exp(af * r);
+  matrices *= n / ns;
+  const auto ni = Eigen::Index(n);
+  const double basis = 8.0 * n * double(lanczos_dim(ni, est.bytes + matrices, o));
+  check_budget(ni, est, matrices, basis, o,
+               "; a lower bound found before meshing, from meshes of " +
+                   std::to_string(coarse.element_count()) + " and " +
+                   std::to_string(sample.element_count()) + " tetrahedra extrapolated to " +
+                   std::to_string(std::llround(tetrahedra)),
+               "at least ");
   return est.bytes + matrices + basis;
 }
 

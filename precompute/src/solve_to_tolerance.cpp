@@ -140,15 +140,38 @@ std::string percent(double x) {
   return buf;
 }
 
-// Weyl's law for an elastic solid: N(omega) ~ V omega^3 / (6 pi^2) (1/c_p^3 + 2/c_s^3), the
-// number of modes below max_frequency, from the volume alone.
-double weyl_modes(double volume, const PrecomputeOptions& o) {
+// How many modes lie below max_frequency, from the volume V and surface area S alone: Weyl's law
+// for an elastic solid, N = V omega^3 / (6 pi^2) (1/c_p^3 + 2/c_s^3), or for a thin body the
+// bending modes of a plate of area S/2 and thickness t = 2V/S, N = (S/2) k^2 / (4 pi) with
+// k^2 = omega / t sqrt(12 rho (1 - nu^2) / E) (Kirchhoff), whichever is more.
+double band_modes(const SurfaceMesh& surface, double volume, const PrecomputeOptions& o) {
+  const Material& m = o.material;
   const double w = 2 * std::numbers::pi * o.max_frequency;
-  const double cs = o.material.shear_speed();
-  const double cp =
-      cs * std::sqrt((o.material.lame_lambda() + 2 * o.material.lame_mu()) / o.material.lame_mu());
-  return volume * w * w * w / (6 * std::numbers::pi * std::numbers::pi) *
-         (1 / (cp * cp * cp) + 2 / (cs * cs * cs));
+  const double cs = m.shear_speed();
+  const double cp = cs * std::sqrt((m.lame_lambda() + 2 * m.lame_mu()) / m.lame_mu());
+  const double solid = volume * w * w * w / (6 * std::numbers::pi * std::numbers::pi) *
+                       (1 / (cp * cp * cp) + 2 / (cs * cs * cs));
+  double area = 0;
+  for (const auto& t : surface.triangles) {
+    const Vec3 n = cross(sub(surface.vertices[t[1]], surface.vertices[t[0]]),
+                         sub(surface.vertices[t[2]], surface.vertices[t[0]]));
+    area += 0.5 * std::sqrt(dot(n, n));
+  }
+  const double thickness = 2 * volume / area;
+  const double k2 =
+      w / thickness *
+      std::sqrt(12 * m.density * (1 - m.poisson_ratio * m.poisson_ratio) / m.youngs_modulus);
+  return std::max(solid, 0.5 * area * k2 / (4 * std::numbers::pi));
+}
+
+// A refusal of the whole band says how many modes it holds, so the user can ask for fewer.
+[[noreturn]] void refuse_band(const BudgetError& e, const SurfaceMesh& surface,
+                              const PrecomputeReport& r, const PrecomputeOptions& o) {
+  if (o.max_modes > 0) throw e;
+  throw BudgetError(std::string(e.what()) + "; about " +
+                    std::to_string(std::llround(band_modes(surface, std::abs(r.mesh.volume), o))) +
+                    " modes lie below " + std::to_string(int(o.max_frequency)) +
+                    " Hz: ask for the first N with --max-modes");
 }
 
 }  // namespace
@@ -165,6 +188,13 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
   TetOptions topt = o.tet;
   topt.max_volume = volume;
   sw.start("tetrahedralize");
+  if (chosen || o.max_modes == 0) {
+    try {
+      check_memory_before_meshing(surface, std::abs(r.mesh.volume), volume, o.order, o.tet, eo);
+    } catch (const BudgetError& e) {
+      refuse_band(e, surface, r, o);
+    }
+  }
   TetMesh tets = tetrahedralize(surface, topt);
   first.vertices.assign(tets.nodes.begin(),
                         tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
@@ -200,11 +230,9 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
       // The first mesh does not fit. A coarser one would resolve neither the band nor the
       // modes in it, and searching for them all is the work to avoid: refuse now, saying how
       // many modes the band holds.
-      if (!dynamic_cast<const BudgetError*>(&e) || o.max_modes > 0) throw;
-      throw BudgetError(std::string(e.what()) + "; about " +
-                        std::to_string(std::llround(weyl_modes(std::abs(r.mesh.volume), o))) +
-                        " modes lie below " + std::to_string(int(o.max_frequency)) +
-                        " Hz: ask for the first N with --max-modes");
+      const auto* budget = dynamic_cast<const BudgetError*>(&e);
+      if (!budget) throw;
+      refuse_band(*budget, surface, r, o);
     }
     worst = worst_error(f, o);
     r.passes.push_back({f.tets.tets.size(), f.dofs, worst, seconds_since(t0), meshed});

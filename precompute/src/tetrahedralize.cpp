@@ -119,7 +119,35 @@ TetMesh mesh_from_output(const tetgenio& out) {
   return m;
 }
 
-TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
+// Renumbers `m` so its boundary's nodes come first (the input's vertices, which TetGen keeps
+// first and in order, then the points it added on the surface) and takes the boundary as the
+// mesh's surface.
+void surface_nodes_first(TetMesh& m, std::size_t input_vertices) {
+  std::vector<std::array<uint32_t, 3>> faces = boundary_faces(m);
+  constexpr uint32_t kNone = UINT32_MAX;
+  std::vector<uint32_t> to(m.nodes.size(), kNone);
+  uint32_t next = 0;
+  for (std::size_t v = 0; v < input_vertices; ++v) to[v] = next++;
+  for (const auto& f : faces)
+    for (uint32_t v : f)
+      if (to[v] == kNone) to[v] = next++;
+  const std::size_t surface = next;
+  for (uint32_t& t : to)
+    if (t == kNone) t = next++;
+  std::vector<Vec3> nodes(m.nodes.size());
+  for (std::size_t v = 0; v < nodes.size(); ++v) nodes[to[v]] = m.nodes[v];
+  m.nodes = std::move(nodes);
+  for (auto& t : m.tets)
+    for (uint32_t& v : t) v = to[v];
+  for (auto& f : faces)
+    for (uint32_t& v : f) v = to[v];
+  m.surface_vertices = surface;
+  m.surface_triangles = std::move(faces);
+}
+
+// keep_surface: -Y, the input triangles are the mesh's boundary; else TetGen may add points on
+// the surface (and split its triangles) where that is the only way to well-shaped tetrahedra.
+TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o, bool keep_surface) {
   tetgenio in, out;
   set_points(in, s.vertices);
   in.numberoffacets = static_cast<int>(s.triangles.size());
@@ -138,7 +166,7 @@ TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   }
   // p: piecewise linear complex; Y: no Steiner points on the surface; q: quality bounds;
   // a: volume bound; z: zero-based; Q: quiet.
-  std::string sw = "pzQY";
+  std::string sw = keep_surface ? "pzQY" : "pzQ";
   char buf[64];
   std::snprintf(buf, sizeof buf, "q%.3g/%.3g", o.max_radius_edge, o.min_dihedral_deg);
   sw += buf;
@@ -168,6 +196,7 @@ TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o) {
   TetMesh m = mesh_from_output(out);
   m.surface_vertices = s.vertices.size();
   m.surface_triangles = s.triangles;
+  if (!keep_surface) surface_nodes_first(m, s.vertices.size());
   return m;
 }
 
@@ -261,7 +290,19 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
   TetOptions tries = o;
   for (int attempt = 0;; ++attempt) {
     std::string crash;
-    if (auto m = tetgen_isolated([&] { return run_tetgen(s, tries); }, crash)) return std::move(*m);
+    if (auto m = tetgen_isolated([&] { return run_tetgen(s, tries, true); }, crash)) {
+      const double worst = tet_quality(*m).min_dihedral_deg;
+      if (!(worst < o.flat_dihedral_deg)) return std::move(*m);
+      std::string ignored;
+      std::optional<TetMesh> steiner;
+      try {
+        steiner = tetgen_isolated([&] { return run_tetgen(s, tries, false); }, ignored);
+      } catch (const InputError&) {
+        // the -Y mesh stands
+      }
+      if (steiner && tet_quality(*steiner).min_dihedral_deg > worst) return std::move(*steiner);
+      return std::move(*m);
+    }
     if (attempt == 2 || tries.max_volume <= 0)
       throw InputError("TetGen failed on this surface (" + crash +
                        "); try another --max-tet-volume or --tolerance, or --repair");

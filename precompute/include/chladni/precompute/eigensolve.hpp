@@ -57,6 +57,19 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
 /// of the node graph, scaled to three DOFs per node), in bytes. Throws BudgetError with the
 /// numbers when it exceeds options.max_memory; 0 without a budget or without CHOLMOD.
 double check_eigen_memory(const FemMesh& mesh, const EigenOptions& options);
+/// Before meshing: a lower bound on the memory solve_modes will need for a mesh of at least
+/// `tetrahedra` elements of the same solid, extrapolated from two coarser meshes of it (`coarse`
+/// smaller than `sample`). Throws BudgetError ("at least ...") when even that exceeds
+/// options.max_memory, so an asset far over the budget is refused in seconds instead of after
+/// meshing; 0 when it cannot say.
+double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& sample,
+                                         double tetrahedra, const EigenOptions& options);
+/// Before meshing `surface` (enclosing `solid` m^3) under `max_volume` with `tet`'s quality:
+/// check_eigen_memory_before_meshing on coarser meshes of it (seconds), so an asset far over the
+/// budget is refused before minutes of meshing. The lower bound in bytes; 0 where the mesh is
+/// close to the coarsest one (quick to make), without a budget, or when it cannot say.
+double check_memory_before_meshing(const SurfaceMesh& surface, double solid, double max_volume,
+                                   int order, const TetOptions& tet, const EigenOptions& options);
 /// Which factorization solve_modes uses in this build.
 std::string factorization_name();
 

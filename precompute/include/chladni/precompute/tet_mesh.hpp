@@ -15,9 +15,11 @@ struct TetMesh {
   std::vector<std::array<uint32_t, 4>> tets;  ///< positively oriented
   /// nodes[0, surface_vertices) are the input surface's vertices in their order: TetGen runs with
   /// -Y (no Steiner points on the surface; without it TetGen 1.5 can abort on poor surfaces).
+  /// Where -Y leaves tetrahedra flatter than TetOptions::flat_dihedral_deg, tetrahedralize
+  /// meshes again with points added on the surface, numbered next.
   std::size_t surface_vertices = 0;
   /// The boundary triangles, outward: the input's, indexing nodes[0, surface_vertices), except
-  /// after refine_tets, which may split them.
+  /// where points were added on the surface and after refine_tets, which may split them.
   std::vector<std::array<uint32_t, 3>> surface_triangles;
 };
 
@@ -25,6 +27,11 @@ struct TetOptions {
   double max_volume = 0;         ///< m^3; 0: no volume bound
   double max_radius_edge = 1.6;  ///< TetGen -q bound on circumradius / shortest edge
   double min_dihedral_deg = 10;  ///< TetGen -q dihedral bound
+  /// Where the surface's own triangles admit no good tetrahedra (rotor.obj), -Y can leave some
+  /// flat: a stiffness so large that round-off outweighs any shift and the factorization fails.
+  /// A mesh with a dihedral angle below this (degrees) is made again with points added on the
+  /// surface, and kept if its worst angle is better.
+  double flat_dihedral_deg = 0.01;
 };
 
 struct TetQuality {
