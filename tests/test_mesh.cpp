@@ -346,7 +346,14 @@ TEST(Tetrahedralize, FlatMeshesAreMadeAgainWithPointsOnTheSurface) {
   const double worst = tet_quality(kept).min_dihedral_deg;
   ASSERT_LT(worst, 1.0);  // the rotor's own triangles force slivers
   o.flat_dihedral_deg = 1.0;
+  std::size_t seen = 0;
+  o.before_remesh = [&](const TetMesh& flat) { seen = flat.tets.size(); };
   const TetMesh t = tetrahedralize(s, o);
+  EXPECT_EQ(seen, kept.tets.size());  // the flat mesh is shown before it is made again
+  EXPECT_GT(t.tets.size(), seen);
+  TetOptions refuse = o;
+  refuse.before_remesh = [](const TetMesh&) { throw BudgetError("over"); };
+  EXPECT_THROW(tetrahedralize(s, refuse), BudgetError);
   const TetQuality q = tet_quality(t);
   EXPECT_GT(q.min_dihedral_deg, worst);
   // TetGen merges nearly coplanar input triangles into one facet and places points on it: all

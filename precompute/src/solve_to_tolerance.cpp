@@ -188,14 +188,19 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
   TetOptions topt = o.tet;
   topt.max_volume = volume;
   sw.start("tetrahedralize");
-  if (chosen || o.max_modes == 0) {
-    try {
+  TetMesh tets;
+  try {
+    if (chosen || o.max_modes == 0)
       check_memory_before_meshing(surface, std::abs(r.mesh.volume), volume, o.order, o.tet, eo);
-    } catch (const BudgetError& e) {
-      refuse_band(e, surface, r, o);
-    }
+    // A flat mesh over the budget is refused before it is made again, larger.
+    TetOptions first_options = topt;
+    first_options.before_remesh = [&](const TetMesh& m) {
+      check_eigen_memory(make_fem_mesh(m, o.order), eo);
+    };
+    tets = tetrahedralize(surface, first_options);
+  } catch (const BudgetError& e) {
+    refuse_band(e, surface, r, o);
   }
-  TetMesh tets = tetrahedralize(surface, topt);
   first.vertices.assign(tets.nodes.begin(),
                         tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
   first.triangles = tets.surface_triangles;

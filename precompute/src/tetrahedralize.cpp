@@ -293,6 +293,7 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
     if (auto m = tetgen_isolated([&] { return run_tetgen(s, tries, true); }, crash)) {
       const double worst = tet_quality(*m).min_dihedral_deg;
       if (!(worst < o.flat_dihedral_deg)) return std::move(*m);
+      if (o.before_remesh) o.before_remesh(*m);
       std::string ignored;
       std::optional<TetMesh> steiner;
       try {

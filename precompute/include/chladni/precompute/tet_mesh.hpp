@@ -2,6 +2,7 @@
 // Volume meshing with TetGen (only tetrahedralize.cpp includes tetgen.h).
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "chladni/core/material.hpp"
@@ -32,6 +33,9 @@ struct TetOptions {
   /// A mesh with a dihedral angle below this (degrees) is made again with points added on the
   /// surface, and kept if its worst angle is better.
   double flat_dihedral_deg = 0.01;
+  /// Called with such a flat mesh before it is made again (larger: the surface is refined to
+  /// the quality bounds); may throw to stop there, e.g. when that mesh is already over budget.
+  std::function<void(const TetMesh&)> before_remesh;
 };
 
 struct TetQuality {

@@ -1,0 +1,36 @@
+#!/usr/bin/env bash
+# Every bundled mesh with no options at all (`chladni precompute MESH -o BANK`: steel, every mode
+# below 20 kHz, with transfer): each either succeeds or is refused before the heavy work, with
+# the memory it would need and the option to change (docs/PERFORMANCE.md, "With no options").
+# Usage: bash bench/no_options_bench.sh [path/to/chladni] [mesh names...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+chladni=${1:-build/cli/chladni}
+shift || true
+names=("$@")
+((${#names[@]})) || names=(bar bowl bell spot rotor pinion_gear coupling sphere)
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+
+echo "| mesh | exit | time (s) | peak RSS (MB) | modes kept | meshes | worst estimate | outcome |"
+echo "|---|---|---|---|---|---|---|---|"
+for name in "${names[@]}"; do
+  set +e
+  /usr/bin/time -f "%e %M" -o "$out/time" "$chladni" precompute "meshes/$name.obj" -q \
+    -o "$out/b.chbank" --json "$out/s.json" 2>"$out/err"
+  code=$?
+  set -e
+  read -r secs kb < <(tail -n 1 "$out/time") || true
+  if ((code == 0)); then
+    python3 - "$name" "$secs" "$kb" "$out/s.json" <<'PY'
+import json, sys
+name, secs, kb, j = sys.argv[1], float(sys.argv[2]), float(sys.argv[3]), json.load(open(sys.argv[4]))
+e = j.get("frequency_error_estimate") or [0]
+print(f"| {name} | 0 | {secs:.1f} | {kb / 1024:.0f} | {j['modes']['kept']} | {len(j['accuracy']['meshes'])} "
+      f"| {100 * max(e):.2f} % | soundbank written |")
+PY
+  else
+    msg=$(grep -v '^\[' "$out/err" | tail -n 1 | cut -c1-400)
+    echo "| $name | $code | $secs | $((kb / 1024)) | | | | ${msg//|/\\|} |"
+  fi
+done
