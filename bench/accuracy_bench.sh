@@ -25,12 +25,14 @@ for name in "${names[@]}"; do
   # The reference: uniform tets a third the default run's mean volume where the default run
   # solved one mesh. A locally refined run's mean volume hides its small tets (a uniform mesh at
   # a third of it can need tens of GB: bell, rotor), so there the first 20 modes are refined
-  # locally to a third of the default run's worst estimate over them instead.
+  # locally to a third of the default run's worst estimate over them instead, but not below 0.15 %
+  # (an estimate of 0.15 % suffices to check 1 %; a third of the coupling's
+  # 0.24 % did not fit this machine).
   ref=$(python3 -c "
 import json, sys
 j = json.load(open(sys.argv[1]))
 if len(j['accuracy']['meshes']) > 1:
-    print('--tolerance', max(1e-4, max(j['frequency_error_estimate'][:20]) / 3))
+    print('--tolerance', max(1.5e-3, max(j['frequency_error_estimate'][:20]) / 3))
 else:
     print('--max-tet-volume', j['surface']['volume_m3'] / j['volume_mesh']['tetrahedra'] / 3)
 " "$out/d.json")
@@ -47,8 +49,11 @@ fd, fr, e = d["frequencies_hz"], r["frequencies_hz"], d["frequency_error_estimat
 n = min(20, len(fd), len(fr))
 actual = max(abs(fd[i] / fr[i] - 1) for i in range(n))
 v = d["volume_mesh"]
+ref = str(r["volume_mesh"]["tetrahedra"])
+if len(r["accuracy"]["meshes"]) > 1:
+    ref += f" (local, {100 * max(r['frequency_error_estimate'][:20]):.2f} %)"
 print(f"| {name} | {len(d['accuracy']['meshes'])} | {v['tetrahedra']} | {v['dofs']} | {d['modes']['kept']} "
       f"| {d['total_seconds']:.1f} | {d['peak_rss_mb']:.0f} | {100 * max(e):.2f} % | {100 * max(e[:20]):.2f} % "
-      f"| {100 * actual:.2f} % | {r['volume_mesh']['tetrahedra']} |", flush=True)
+      f"| {100 * actual:.2f} % | {ref} |", flush=True)
 PY
 done

@@ -30,7 +30,22 @@ print(f"| {name} | 0 | {secs:.1f} | {kb / 1024:.0f} | {j['modes']['kept']} | {le
       f"| {100 * max(e):.2f} % | soundbank written |")
 PY
   else
-    msg=$(grep -v '^\[' "$out/err" | tail -n 1 | cut -c1-400)
-    echo "| $name | $code | $secs | $((kb / 1024)) | | | | ${msg//|/\\|} |"
+    # The refusal in short: what it needs, when it was found, the budget, the modes in the band.
+    msg=$(grep -v '^\[' "$out/err" | tail -n 1)
+    short=$(python3 - "$msg" <<'PY'
+import re, sys
+m = sys.argv[1]
+need = re.search(r"would need (at least|about) ([0-9.]+ GB)", m)
+budget = re.search(r"memory budget of ([0-9.]+ GB)", m)
+modes = re.search(r"about ([0-9]+) modes lie below", m)
+if not (need and budget):
+    print(m[:300].replace("|", "\\|"))
+else:
+    when = "before meshing" if "before meshing" in m else "after meshing, before assembly"
+    print(f"refused {when}: needs {need.group(1)} {need.group(2)}, budget {budget.group(1)}"
+          + (f"; about {modes.group(1)} modes below 20 kHz" if modes else ""))
+PY
+)
+    echo "| $name | $code | $secs | $((kb / 1024)) | | | | $short |"
   fi
 done
