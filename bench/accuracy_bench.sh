@@ -4,14 +4,8 @@
 # solved, the error estimate, and the first 20 modes against a reference solve (see below). A
 # run that fails prints its error as the row.
 # Usage: bash bench/accuracy_bench.sh [path/to/chladni] [mesh names...]   (default: build/cli/chladni, all)
-set -euo pipefail
-cd "$(dirname "$0")/.."
-chladni=${1:-build/cli/chladni}
-shift || true
-names=("$@")
-((${#names[@]})) || names=(bar bowl bell spot rotor pinion_gear coupling sphere)
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+# shellcheck source=bench/bundled_meshes.sh
+source "$(dirname "$0")/bundled_meshes.sh"
 
 echo "| mesh | meshes solved | tets | DOFs | modes kept | time (s) | peak RSS (MB) | worst estimate, 100 modes | worst estimate, first 20 | first 20 against the reference | reference tets |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|"

@@ -3,14 +3,8 @@
 # below 20 kHz, with transfer): each either succeeds or is refused before the heavy work, with
 # the memory it would need and the option to change (docs/PERFORMANCE.md, "With no options").
 # Usage: bash bench/no_options_bench.sh [path/to/chladni] [mesh names...]
-set -euo pipefail
-cd "$(dirname "$0")/.."
-chladni=${1:-build/cli/chladni}
-shift || true
-names=("$@")
-((${#names[@]})) || names=(bar bowl bell spot rotor pinion_gear coupling sphere)
-out=$(mktemp -d)
-trap 'rm -rf "$out"' EXIT
+# shellcheck source=bench/bundled_meshes.sh
+source "$(dirname "$0")/bundled_meshes.sh"
 
 echo "| mesh | exit | time (s) | peak RSS (MB) | modes kept | meshes | worst estimate | outcome |"
 echo "|---|---|---|---|---|---|---|---|"
