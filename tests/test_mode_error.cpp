@@ -318,6 +318,25 @@ TEST(ModeError, AllModesOverTheBudgetAreRefusedAtOnce) {
   EXPECT_TRUE(r.passes.empty());
 }
 
+// TetGen's child has a memory allowance beyond what it shares with the parent (a runaway
+// refinement grew to 17 GB): past it, meshing is an error that names the allowance, not a
+// machine out of memory.
+TEST(ModeError, TetGenMemoryAllowanceIsAnError) {
+  TetOptions t;
+  t.max_volume = 1e-7;
+  const SurfaceMesh box = test::box_surface({0.3, 0.18, 0.12}, {2, 1, 1});
+  setenv("CHLADNI_TETGEN_MEMORY_GB", "0.002", 1);
+  try {
+    tetrahedralize(box, t);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("allowance (CHLADNI_TETGEN_MEMORY_GB)"), std::string::npos)
+        << e.what();
+  }
+  unsetenv("CHLADNI_TETGEN_MEMORY_GB");
+  EXPECT_GT(tetrahedralize(box, t).tets.size(), 100000u);
+}
+
 // TetGen runs in a child process: when it aborts (as TetGen 1.5's assertions do on some
 // surfaces and bounds), precompute reports it as bad input instead of crashing.
 TEST(ModeError, TetGenAbortIsAnErrorNotACrash) {

@@ -3,13 +3,18 @@
 #include "tetgen_child.hpp"
 
 #include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <new>
 
 #include "chladni/core/error.hpp"
 
@@ -39,7 +44,31 @@ bool write_all(int fd, const char* p, std::size_t n) {
 
 }  // namespace
 
-std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std::string& crash) {
+namespace {
+
+// TetGen's quality refinement can run away on some surfaces (coupling.obj refined locally grew
+// to 17 GB in 17 minutes): the child may take this much beyond what it shares with the parent.
+// 8 GB meshes the 20 million tetrahedra tetrahedralize allows; CHLADNI_TETGEN_MEMORY_GB sets it.
+double memory_allowance() {
+  const char* gb = std::getenv("CHLADNI_TETGEN_MEMORY_GB");
+  const double v = gb ? std::strtod(gb, nullptr) : 0;
+  return v > 0 && std::isfinite(v) ? v * 1e9 : 8e9;
+}
+
+// Caps the child's address space at its size now plus the allowance.
+void limit_memory(double allowance) {
+  std::ifstream statm("/proc/self/statm");
+  double pages = 0;
+  if (!(statm >> pages)) return;
+  const double limit = pages * double(sysconf(_SC_PAGE_SIZE)) + allowance;
+  const rlimit r{rlim_t(limit), rlim_t(limit)};
+  setrlimit(RLIMIT_AS, &r);
+}
+
+}  // namespace
+
+std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std::string& crash,
+                                       double allowance) {
   int fd[2];
   if (pipe(fd) != 0) return job();  // no isolation to be had: run in-process
   const pid_t pid = fork();
@@ -56,6 +85,8 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
       if (null >= 0) dup2(null, STDERR_FILENO), close(null);
     }
     if (std::getenv("CHLADNI_TEST_TETGEN_ABORT")) std::abort();  // tests: TetGen's assertion
+    if (!(allowance > 0)) allowance = memory_allowance();
+    limit_memory(allowance);
     std::string msg;
     std::vector<char> bytes;
     char status = 0;
@@ -68,9 +99,23 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
       append(bytes, m.tets.data(), m.tets.size() * sizeof(m.tets[0]));
       append(bytes, m.surface_triangles.data(),
              m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
+    } catch (const std::bad_alloc&) {
+      status = 1;
+      char buf[160];
+      std::snprintf(buf, sizeof buf,
+                    "TetGen needed more than its %.3g GB allowance (CHLADNI_TETGEN_MEMORY_GB)",
+                    allowance / 1e9);
+      msg = buf;
+      bytes.assign(msg.begin(), msg.end());
     } catch (const std::exception& e) {
       status = 1;
       msg = e.what();
+      if (msg.find("out of memory") != std::string::npos) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, " within its %.3g GB allowance (CHLADNI_TETGEN_MEMORY_GB)",
+                      allowance / 1e9);
+        msg += buf;
+      }
       bytes.assign(msg.begin(), msg.end());
     }
     const bool ok = write_all(fd[1], &status, 1) && write_all(fd[1], bytes.data(), bytes.size());

@@ -9,7 +9,9 @@ namespace chladni::precompute {
 
 /// Runs `job` (a TetGen call) in a child process and reads its mesh back through a pipe.
 /// Returns nothing, with `crash` saying how, when the child dies; rethrows the child's
-/// exceptions as InputError.
-std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std::string& crash);
+/// exceptions as InputError. The child may allocate `allowance` bytes beyond what it shares
+/// with the parent (0: CHLADNI_TETGEN_MEMORY_GB, or 8 GB); past that it fails with InputError.
+std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std::string& crash,
+                                       double allowance = 0);
 
 }  // namespace chladni::precompute

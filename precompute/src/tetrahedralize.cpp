@@ -318,13 +318,20 @@ TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
   // As for meshing: an assertion TetGen fails at some bounds is usually passed at slightly
   // smaller ones.
   std::vector<double> bounds = max_volume;
+  // A refinement that runs away (coupling.obj: 17 GB in 17 minutes) fails once it far exceeds
+  // what was asked: 16 KB per tetrahedron the bounds call for (TetGen takes about 4 KB while
+  // refining), at least 2 GB. Bisection then takes over.
+  double asked = 0;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    asked += bounds[e] > 0 ? std::max(1.0, std::abs(tet_volume(mesh, e)) / bounds[e]) : 1.0;
+  const double allowance = std::max(2e9, 16e3 * asked);
   for (int attempt = 0;; ++attempt) {
     std::string crash;
     auto job = [&] {
       if (std::getenv("CHLADNI_TEST_TETGEN_ABORT_REFINE")) std::abort();  // tests: the fallback
       return run_tetgen_refine(mesh, bounds, o);
     };
-    if (auto m = tetgen_isolated(job, crash)) return std::move(*m);
+    if (auto m = tetgen_isolated(job, crash, allowance)) return std::move(*m);
     if (attempt == 2) throw InputError("TetGen failed refining the mesh (" + crash + ")");
     for (double& b : bounds) b *= 0.9;
   }
