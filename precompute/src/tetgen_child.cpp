@@ -85,8 +85,10 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
       if (null >= 0) dup2(null, STDERR_FILENO), close(null);
     }
     if (std::getenv("CHLADNI_TEST_TETGEN_ABORT")) std::abort();  // tests: TetGen's assertion
-    if (!(allowance > 0)) allowance = memory_allowance();
+    const bool from_env = !(allowance > 0);  // else the caller's, from the mesh asked for
+    if (from_env) allowance = memory_allowance();
     limit_memory(allowance);
+    const char* knob = from_env ? " (CHLADNI_TETGEN_MEMORY_GB)" : "";
     std::string msg;
     std::vector<char> bytes;
     char status = 0;
@@ -102,9 +104,8 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
     } catch (const std::bad_alloc&) {
       status = 1;
       char buf[160];
-      std::snprintf(buf, sizeof buf,
-                    "TetGen needed more than its %.3g GB allowance (CHLADNI_TETGEN_MEMORY_GB)",
-                    allowance / 1e9);
+      std::snprintf(buf, sizeof buf, "TetGen needed more than its %.3g GB allowance%s",
+                    allowance / 1e9, knob);
       msg = buf;
       bytes.assign(msg.begin(), msg.end());
     } catch (const std::exception& e) {
@@ -112,8 +113,7 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
       msg = e.what();
       if (msg.find("out of memory") != std::string::npos) {
         char buf[96];
-        std::snprintf(buf, sizeof buf, " within its %.3g GB allowance (CHLADNI_TETGEN_MEMORY_GB)",
-                      allowance / 1e9);
+        std::snprintf(buf, sizeof buf, " within its %.3g GB allowance%s", allowance / 1e9, knob);
         msg += buf;
       }
       bytes.assign(msg.begin(), msg.end());
