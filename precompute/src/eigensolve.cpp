@@ -434,19 +434,21 @@ double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& s
   const bool p2 = sample.nodes_per_element() == 10;
   const double n =
       std::max(ns, std::min(p2 ? 3.6 : 0.4, ns / double(sample.element_count())) * tetrahedra);
-  double matrices = 0, coarse_matrices = 0;
+  double matrices = 0;
   FactorEstimate est = node_graph_estimate(sample, matrices);
-  const FactorEstimate low = node_graph_estimate(coarse, coarse_matrices);
-  if (est.bytes <= 0 || low.bytes <= 0) return 0;
+  if (est.bytes <= 0) return 0;
   // Nested dissection's factor grows as n^(4/3) in a solid and n log n in a shell, and a thin
   // part grows faster once its thickness is resolved: the growth between the two meshes,
   // within [1, 4/3] (flops [1, 2]), extrapolated from the finer one can only underestimate.
   // Where the two are alike (a surface that decides the mesh), only the floors are known.
   const double r = std::log(n / ns), rs = std::log(ns / double(coarse.dofs()));
-  const bool grew = rs > 0.05;
-  const double a =
-      grew ? std::clamp(std::log(est.entries / low.entries) / rs, 1.0, 4.0 / 3.0) : 1.0;
-  const double af = grew ? std::clamp(std::log(est.flops / low.flops) / rs, 1.0, 2.0) : 1.0;
+  double a = 1, af = 1;
+  if (rs > 0.05) {
+    double unused = 0;
+    const FactorEstimate low = node_graph_estimate(coarse, unused);
+    a = std::clamp(std::log(est.entries / low.entries) / rs, 1.0, 4.0 / 3.0);
+    af = std::clamp(std::log(est.flops / low.flops) / rs, 1.0, 2.0);
+  }
   est.entries *= std::exp(a * r), est.bytes *= std::exp(a * r), est.flops *= std::exp(af * r);
   matrices *= n / ns;
   const auto ni = Eigen::Index(n);

@@ -42,10 +42,6 @@ bool write_all(int fd, const char* p, std::size_t n) {
   return true;
 }
 
-}  // namespace
-
-namespace {
-
 // TetGen's quality refinement can run away on some surfaces (coupling.obj refined locally grew
 // to 17 GB in 17 minutes): the child may take this much beyond what it shares with the parent.
 // 8 GB meshes the 20 million tetrahedra tetrahedralize allows; CHLADNI_TETGEN_MEMORY_GB sets it.
@@ -88,7 +84,9 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
     const bool from_env = !(allowance > 0);  // else the caller's, from the mesh asked for
     if (from_env) allowance = memory_allowance();
     limit_memory(allowance);
-    const char* knob = from_env ? " (CHLADNI_TETGEN_MEMORY_GB)" : "";
+    char over[96];
+    std::snprintf(over, sizeof over, "its %.3g GB allowance%s", allowance / 1e9,
+                  from_env ? " (CHLADNI_TETGEN_MEMORY_GB)" : "");
     std::string msg;
     std::vector<char> bytes;
     char status = 0;
@@ -103,19 +101,12 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
              m.surface_triangles.size() * sizeof(m.surface_triangles[0]));
     } catch (const std::bad_alloc&) {
       status = 1;
-      char buf[160];
-      std::snprintf(buf, sizeof buf, "TetGen needed more than its %.3g GB allowance%s",
-                    allowance / 1e9, knob);
-      msg = buf;
+      msg = std::string("TetGen needed more than ") + over;
       bytes.assign(msg.begin(), msg.end());
     } catch (const std::exception& e) {
       status = 1;
       msg = e.what();
-      if (msg.find("out of memory") != std::string::npos) {
-        char buf[96];
-        std::snprintf(buf, sizeof buf, " within its %.3g GB allowance%s", allowance / 1e9, knob);
-        msg += buf;
-      }
+      if (msg.find("out of memory") != std::string::npos) msg += std::string(" within ") + over;
       bytes.assign(msg.begin(), msg.end());
     }
     const bool ok = write_all(fd[1], &status, 1) && write_all(fd[1], bytes.data(), bytes.size());
