@@ -16,6 +16,7 @@ PACKAGES=(
   libhmat-oss-dev
   librtaudio-dev libjack-jackd2-dev jackd2 libbullet-dev
   clang-format clang libclang-rt-14-dev llvm
+  time  # /usr/bin/time: peak memory in bench/no_options_bench.sh
 )
 # `deps.sh tests` adds what only the tests need: Chromium, for the browser tests of the HTML
 # report (driven over the DevTools pipe; its WebGL runs on SwiftShader, no GPU needed).
