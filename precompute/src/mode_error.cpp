@@ -72,6 +72,10 @@ std::array<Strain, 4> corner_strains(const FemMesh& mesh, std::size_t e, const E
 // its polynomial's value; a mid-edge node the mean of its two ends' polynomials there. (Plain
 // nodal averaging underestimates P2 errors by up to 2.5 times: the element strains are least
 // accurate at the nodes.)
+//
+// The fit is linear in the element strains and its geometry is the same for every mode, so the
+// map from each patch element's corner strains to the vertex's coefficients (10 x 4) and the
+// polynomial values at each mid-edge node are computed once; a mode then costs small products.
 class PatchRecovery {
  public:
   PatchRecovery(const FemMesh& mesh, const std::vector<ElementGeometry>& geo)
@@ -86,40 +90,31 @@ class PatchRecovery {
     for (std::size_t e = 0; e < ne; ++e)
       for (int c = 0; c < 4; ++c) patch_[count[mesh.elements[e * npe_ + c]]++] = uint32_t(e);
     fit_.resize(mesh.nodes.size());
+    map_.resize(patch_.size());
     for (std::size_t v = 0; v < mesh.nodes.size(); ++v)
-      if (offset_[v + 1] > offset_[v]) fit_[v] = make_fit(v);
+      if (offset_[v + 1] > offset_[v]) make_fit(v);
+    if (npe_ == 10) make_edge_nodes();
   }
 
   // Corner strains of every element, then each corner's fit, then the nodal values.
   void recover(const double* u, const std::vector<ElementGeometry>& geo,
                std::vector<std::array<Strain, 4>>& corner, std::vector<Coefficients>& coef,
                std::vector<Strain>& recovered) const {
+    using CornerMatrix = Eigen::Matrix<double, 4, 6, Eigen::RowMajor>;
     for (std::size_t e = 0; e < geo.size(); ++e) corner[e] = corner_strains(mesh_, e, geo[e], u);
     for (std::size_t v = 0; v < fit_.size(); ++v) {
       if (offset_[v + 1] == offset_[v]) continue;
-      Eigen::Matrix<double, 10, 6> rhs = Eigen::Matrix<double, 10, 6>::Zero();
-      for (uint32_t i = offset_[v]; i < offset_[v + 1]; ++i) {
-        const uint32_t e = patch_[i];
-        for_each_sample(e, [&](const std::array<double, 4>& L, const Vec3& x) {
-          Eigen::Matrix<double, 1, 6> eps = Eigen::Matrix<double, 1, 6>::Zero();
-          for (int c = 0; c < 4; ++c)
-            for (int k = 0; k < 6; ++k) eps(k) += L[c] * corner[e][c][k];
-          rhs += basis(v, x) * eps;
-        });
-      }
-      coef[v] = fit_[v].inverse * rhs;
-      for (int k = 0; k < 6; ++k) recovered[v][k] = coef[v](0, k);
+      Coefficients c = Coefficients::Zero();
+      for (uint32_t i = offset_[v]; i < offset_[v + 1]; ++i)
+        c.noalias() += map_[i] * Eigen::Map<const CornerMatrix>(corner[patch_[i]][0].data());
+      coef[v] = c;
+      for (int k = 0; k < 6; ++k) recovered[v][k] = c(0, k);
     }
-    for (std::size_t e = 0; e < geo.size() && npe_ == 10; ++e)
-      for (int a = 4; a < 10; ++a) {
-        const uint32_t i = mesh_.elements[e * npe_ + detail::kEdges[a - 4][0]];
-        const uint32_t j = mesh_.elements[e * npe_ + detail::kEdges[a - 4][1]];
-        const uint32_t n = mesh_.elements[e * npe_ + a];
-        const Vec3& x = mesh_.nodes[n];
-        const Eigen::Matrix<double, 1, 6> val =
-            0.5 * (basis(i, x).transpose() * coef[i] + basis(j, x).transpose() * coef[j]);
-        for (int k = 0; k < 6; ++k) recovered[n][k] = val(k);
-      }
+    for (const EdgeNode& m : edge_nodes_) {
+      const Eigen::Matrix<double, 1, 6> val =
+          0.5 * (m.phi_i.transpose() * coef[m.i] + m.phi_j.transpose() * coef[m.j]);
+      for (int k = 0; k < 6; ++k) recovered[m.node][k] = val(k);
+    }
   }
 
  private:
@@ -127,7 +122,10 @@ class PatchRecovery {
     Vec3 centre{};
     double scale = 1;
     int terms = 1;  // 10: quadratic, 4: linear, 1: constant
-    Eigen::Matrix<double, 10, 10> inverse = Eigen::Matrix<double, 10, 10>::Zero();
+  };
+  struct EdgeNode {
+    uint32_t node = 0, i = 0, j = 0;            // the mid-edge node and its edge's ends
+    Eigen::Matrix<double, 10, 1> phi_i, phi_j;  // the ends' polynomial bases at the node
   };
 
   template <class Fn>
@@ -162,10 +160,11 @@ class PatchRecovery {
     return phi;
   }
 
-  Fit make_fit(std::size_t v) {
+  // The vertex's polynomial, then map_: (normal matrix)^+ sum over the element's samples of
+  // phi(x_q) L_q^T, which takes the element's corner strains (4 x 6) to coefficients (10 x 6).
+  void make_fit(std::size_t v) {
     Fit& f = fit_[v];
     f.centre = mesh_.nodes[v];
-    std::size_t samples = 0;
     double reach = 0;
     for (uint32_t i = offset_[v]; i < offset_[v + 1]; ++i)
       for (int c = 0; c < 4; ++c) {
@@ -173,11 +172,12 @@ class PatchRecovery {
             sub(mesh_.nodes[mesh_.elements[std::size_t(patch_[i]) * npe_ + c]], f.centre);
         reach = std::max(reach, std::sqrt(dot(d, d)));
       }
-    samples = (offset_[v + 1] - offset_[v]) * (npe_ == 10 ? 4 : 1);
+    const std::size_t samples = (offset_[v + 1] - offset_[v]) * (npe_ == 10 ? 4 : 1);
     f.scale = reach > 0 ? reach : 1;
     // The richest polynomial the samples determine: a flat patch (a thin wall's surface, four
     // coplanar centroids) leaves higher terms undetermined, and a rank-deficient fit would not
     // reproduce even a constant at the vertex.
+    Eigen::Matrix<double, 10, 10> inverse = Eigen::Matrix<double, 10, 10>::Zero();
     for (int terms : {npe_ == 10 ? 10 : 4, 4, 1}) {
       if (samples < std::size_t(terms == 10 ? 20 : terms)) continue;  // quadratic: 2 per term
       f.terms = terms;
@@ -190,17 +190,41 @@ class PatchRecovery {
       Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd> cod(normal);
       cod.setThreshold(1e-9);
       if (cod.rank() < terms) continue;
-      f.inverse.setZero();
-      f.inverse.topLeftCorner(terms, terms) = cod.pseudoInverse();
+      inverse.setZero();
+      inverse.topLeftCorner(terms, terms) = cod.pseudoInverse();
       break;
     }
-    return f;
+    for (uint32_t i = offset_[v]; i < offset_[v + 1]; ++i) {
+      Eigen::Matrix<double, 10, 4> sum = Eigen::Matrix<double, 10, 4>::Zero();
+      for_each_sample(patch_[i], [&](const std::array<double, 4>& L, const Vec3& x) {
+        sum += basis(v, x) * Eigen::Map<const Eigen::Matrix<double, 1, 4>>(L.data());
+      });
+      map_[i] = inverse * sum;
+    }
+  }
+
+  void make_edge_nodes() {
+    std::vector<bool> seen(mesh_.nodes.size(), false);
+    for (std::size_t e = 0; e < mesh_.element_count(); ++e)
+      for (int a = 4; a < 10; ++a) {
+        EdgeNode m;
+        m.node = mesh_.elements[e * npe_ + a];
+        if (seen[m.node]) continue;
+        seen[m.node] = true;
+        m.i = mesh_.elements[e * npe_ + detail::kEdges[a - 4][0]];
+        m.j = mesh_.elements[e * npe_ + detail::kEdges[a - 4][1]];
+        m.phi_i = basis(m.i, mesh_.nodes[m.node]);
+        m.phi_j = basis(m.j, mesh_.nodes[m.node]);
+        edge_nodes_.push_back(m);
+      }
   }
 
   const FemMesh& mesh_;
   int npe_;
-  std::vector<uint32_t> offset_, patch_;  // CSR: the elements at each node (as a corner)
+  std::vector<uint32_t> offset_, patch_;           // CSR: the elements at each node (as a corner)
+  std::vector<Eigen::Matrix<double, 10, 4>> map_;  // per patch_ entry
   std::vector<Fit> fit_;
+  std::vector<EdgeNode> edge_nodes_;
 };
 
 // integral over the element of (eps* - eps_h) : C : (eps* - eps_h), exactly: the difference is a
