@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "chladni/core/error.hpp"
+#include "huge_pages.hpp"
 
 namespace chladni::precompute {
 namespace {
@@ -26,6 +27,25 @@ std::string status_text(int status) {
   }
 }
 
+// A symmetric matrix (lower triangle read) over compressed columns in long indices; a pattern
+// only where x is null.
+cholmod_sparse lower_view(std::vector<SuiteSparse_long>& p, std::vector<SuiteSparse_long>& i,
+                          double* x) {
+  cholmod_sparse s{};
+  s.nrow = s.ncol = p.size() - 1;
+  s.nzmax = i.size();
+  s.p = p.data();
+  s.i = i.data();
+  s.x = x;
+  s.stype = -1;
+  s.itype = CHOLMOD_LONG;
+  s.xtype = x ? CHOLMOD_REAL : CHOLMOD_PATTERN;
+  s.dtype = CHOLMOD_DOUBLE;
+  s.sorted = 1;
+  s.packed = 1;
+  return s;
+}
+
 }  // namespace
 
 struct CholmodFactor::Impl {
@@ -39,19 +59,7 @@ struct CholmodFactor::Impl {
     if (!A.isCompressed()) throw InternalError("CHOLMOD: the matrix must be compressed");
     if (A.rows() != n || std::size_t(A.nonZeros()) != i.size())
       throw InternalError("CHOLMOD: the matrix does not have the analyzed pattern");
-    cholmod_sparse s{};
-    s.nrow = s.ncol = std::size_t(n);
-    s.nzmax = i.size();
-    s.p = p.data();
-    s.i = i.data();
-    s.x = const_cast<double*>(A.valuePtr());
-    s.stype = -1;
-    s.itype = CHOLMOD_LONG;
-    s.xtype = CHOLMOD_REAL;
-    s.dtype = CHOLMOD_DOUBLE;
-    s.sorted = 1;
-    s.packed = 1;
-    return s;
+    return lower_view(p, i, const_cast<double*>(A.valuePtr()));
   }
 
   void check(bool ok, const char* what) {
@@ -59,6 +67,43 @@ struct CholmodFactor::Impl {
     throw InputError(std::string("the sparse factorization failed in ") + what + " (" +
                      status_text(c.status) +
                      "): lower --max-freq or --max-modes, or raise --max-tet-volume");
+  }
+
+  // A fill-reducing ordering of the block graph (CHOLMOD's choice between AMD and METIS, both
+  // tried: METIS wins on solids, AMD on some shells), each block's rows kept together. On a P2
+  // mesh of 88k DOFs this takes 0.6 s instead of the 1.2 s of ordering the scalar matrix, for
+  // about 1 % more fill. Empty where the block graph cannot be ordered (the caller then orders A).
+  std::vector<SuiteSparse_long> block_ordering(int block) {
+    const long nb = n / block;
+    std::vector<SuiteSparse_long> gp(std::size_t(nb) + 1, 0), gi;
+    gi.reserve(i.size() / std::size_t(block * block));
+    for (long c = 0; c < nb; ++c) {
+      for (SuiteSparse_long q = p[std::size_t(c * block)]; q < p[std::size_t(c * block) + 1]; ++q) {
+        const SuiteSparse_long r = i[std::size_t(q)] / block;  // rows are sorted
+        if (r >= c && (gi.size() == std::size_t(gp[std::size_t(c)]) || gi.back() != r))
+          gi.push_back(r);
+      }
+      gp[std::size_t(c) + 1] = SuiteSparse_long(gi.size());
+    }
+    cholmod_sparse g = lower_view(gp, gi, nullptr);
+    const int methods = c.nmethods, first = c.method[0].ordering, second = c.method[1].ordering;
+    c.nmethods = 2;
+    c.method[0].ordering = CHOLMOD_AMD;
+    c.method[1].ordering = CHOLMOD_METIS;
+    cholmod_factor* Lg = cholmod_l_analyze(&g, &c);
+    c.nmethods = methods;
+    c.method[0].ordering = first;
+    c.method[1].ordering = second;
+    std::vector<SuiteSparse_long> perm;
+    if (Lg && c.status >= CHOLMOD_OK) {
+      const auto* order = static_cast<const SuiteSparse_long*>(Lg->Perm);
+      perm.resize(std::size_t(n));
+      for (long k = 0; k < nb; ++k)
+        for (int d = 0; d < block; ++d) perm[std::size_t(k * block + d)] = order[k] * block + d;
+    }
+    if (Lg) cholmod_l_free_factor(&Lg, &c);
+    c.status = CHOLMOD_OK;
+    return perm;
   }
 
   void solve(std::initializer_list<int> systems, double* x, long rows, long cols) {
@@ -81,6 +126,7 @@ struct CholmodFactor::Impl {
 };
 
 CholmodFactor::CholmodFactor() : impl_(std::make_unique<Impl>()) {
+  use_huge_pages_in_suitesparse();
   cholmod_l_start(&impl_->c);
   impl_->c.final_asis = 1;
   impl_->c.supernodal = CHOLMOD_SUPERNODAL;
@@ -92,14 +138,25 @@ CholmodFactor::~CholmodFactor() {
   cholmod_l_finish(&impl_->c);
 }
 
-FactorEstimate CholmodFactor::analyze(const SparseMatrix& A) {
+FactorEstimate CholmodFactor::analyze(const SparseMatrix& A, int block) {
   Impl& m = *impl_;
   if (m.L) cholmod_l_free_factor(&m.L, &m.c);
   m.n = A.rows();
   m.p.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
   m.i.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
   cholmod_sparse s = m.view(A);
-  m.L = cholmod_l_analyze(&s, &m.c);
+  const std::vector<SuiteSparse_long> perm =
+      block > 1 && m.n % block == 0 ? m.block_ordering(block) : std::vector<SuiteSparse_long>{};
+  if (perm.empty()) {
+    m.L = cholmod_l_analyze(&s, &m.c);
+  } else {
+    const int methods = m.c.nmethods, ordering = m.c.method[0].ordering;
+    m.c.nmethods = 1;
+    m.c.method[0].ordering = CHOLMOD_GIVEN;
+    m.L = cholmod_l_analyze_p(&s, const_cast<SuiteSparse_long*>(perm.data()), nullptr, 0, &m.c);
+    m.c.nmethods = methods;
+    m.c.method[0].ordering = ordering;
+  }
   m.check(m.L != nullptr, "the symbolic analysis");
   FactorEstimate e;
   e.entries = m.c.lnz;

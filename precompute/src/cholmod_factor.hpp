@@ -22,9 +22,11 @@ class CholmodFactor {
   CholmodFactor(const CholmodFactor&) = delete;
   CholmodFactor& operator=(const CholmodFactor&) = delete;
 
-  /// Orders and analyzes the pattern of A (symmetric; its lower triangle is read). Throws
+  /// Orders and analyzes the pattern of A (symmetric; its lower triangle is read). With
+  /// `block` > 1, A is made of dense block x block blocks (3: a node's displacements), and the
+  /// ordering is found on the graph of the blocks, a ninth of the entries, then expanded. Throws
   /// InputError when CHOLMOD runs out of memory or the problem exceeds its index range.
-  FactorEstimate analyze(const SparseMatrix& A);
+  FactorEstimate analyze(const SparseMatrix& A, int block = 1);
   /// Numeric factorization of A, which must have the analyzed pattern. False when A is not
   /// positive definite; throws InputError on any other CHOLMOD failure.
   bool factorize(const SparseMatrix& A);

@@ -19,6 +19,7 @@
 
 #include "chladni/core/error.hpp"
 #include "eigensolve_dense.hpp"
+#include "huge_pages.hpp"
 #include "shift_invert.hpp"
 #include "timing.hpp"
 
@@ -41,7 +42,9 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
                                  const std::function<void(const std::string&)>& status) {
   const Eigen::Index n = op.rows();
   max_dim = std::min<Eigen::Index>(max_dim, n) / b * b;
-  Eigen::MatrixXd V(n, std::min<Eigen::Index>(max_dim, std::max<Eigen::Index>(4 * b, 3 * want)));
+  Eigen::MatrixXd V(
+      n, std::min<Eigen::Index>(max_dim, std::max<Eigen::Index>(4 * b, 4 * want + 2 * b)));
+  advise_huge_pages(V.data(), sizeof(double) * std::size_t(V.size()));
   // T grows with V: max_dim is a memory bound (thousands of columns), not the usual size.
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(V.cols(), V.cols());
   std::mt19937 rng(12345);  // fixed: the same mesh gives the same modes
@@ -123,6 +126,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
     if (k + b > V.cols()) {
       const Eigen::Index cols = std::min<Eigen::Index>(max_dim, 2 * V.cols());
       V.conservativeResize(n, cols);
+      advise_huge_pages(V.data(), sizeof(double) * std::size_t(V.size()));
       T.conservativeResizeLike(Eigen::MatrixXd::Zero(cols, cols));
     }
     V.middleCols(k, b) = W;
@@ -371,6 +375,8 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
                      "(--max-tet-volume)");
   r.vectors.resize(n, Eigen::Index(r.lambda.size()));
   Eigen::MatrixXd Mk(n, r.vectors.cols());
+  advise_huge_pages(r.vectors.data(), sizeof(double) * std::size_t(r.vectors.size()));
+  advise_huge_pages(Mk.data(), sizeof(double) * std::size_t(Mk.size()));
   for (std::size_t i = 0; i < r.lambda.size(); ++i) {
     r.vectors.col(Eigen::Index(i)) = evecs.col(elastic[i]);
     Mk.col(Eigen::Index(i)) = Mv.col(elastic[i]);
@@ -395,6 +401,7 @@ FactorEstimate node_graph_estimate(const FemMesh& mesh, double& matrices) {
   const int npe = mesh.nodes_per_element();
   std::vector<Eigen::Triplet<double, int>> t;
   t.reserve(mesh.element_count() * std::size_t(npe * npe));
+  advise_huge_pages(t.data(), sizeof(t[0]) * t.capacity());
   for (std::size_t e = 0; e < mesh.element_count(); ++e)
     for (int a = 0; a < npe; ++a)
       for (int b = 0; b < npe; ++b)
@@ -405,7 +412,7 @@ FactorEstimate node_graph_estimate(const FemMesh& mesh, double& matrices) {
   G.makeCompressed();
   t = {};
   Factor f;
-  FactorEstimate est = f.analyze(G);
+  FactorEstimate est = f.analyze(G, 1);
   est.entries *= 9, est.bytes *= 9, est.flops *= 27;
   matrices = kMatrixBytesPerEntry * 9.0 * double(G.nonZeros());
   return est;

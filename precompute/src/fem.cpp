@@ -12,6 +12,7 @@
 
 #include "chladni/core/error.hpp"
 #include "fem_element.hpp"
+#include "huge_pages.hpp"
 
 namespace chladni::precompute {
 namespace detail {
@@ -186,6 +187,8 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   auto pattern = [&](SparseMatrix& A) {
     A.resize(int(3 * nn), int(3 * nn));
     A.resizeNonZeros(int(nnz));
+    advise_huge_pages(A.valuePtr(), nnz * sizeof(double));
+    advise_huge_pages(A.innerIndexPtr(), nnz * sizeof(int));
     int* outer = A.outerIndexPtr();
     int* inner = A.innerIndexPtr();
     for (std::size_t n = 0; n < nn; ++n) {
@@ -214,8 +217,11 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   std::mutex error_mutex;
   auto work = [&](int t) {
     try {
-      kv[t].assign(nnz, 0.0);
-      mv[t].assign(nnz, 0.0);
+      for (auto* v : {&kv[t], &mv[t]}) {
+        v->reserve(nnz);
+        advise_huge_pages(v->data(), nnz * sizeof(double));
+        v->assign(nnz, 0.0);
+      }
       Mat12 K1, M1;
       Mat30 K2, M2;
       const std::size_t lo = ne * t / nt, hi = ne * (t + 1) / nt;

@@ -24,7 +24,7 @@ constexpr const char* kFactorName = "CHOLMOD supernodal LLT";
 // CHOLMOD's supernodal LLT with every call checked (cholmod_factor.cpp).
 class Factor {
  public:
-  FactorEstimate analyze(const SparseMatrix& A) { return chol_.analyze(A); }
+  FactorEstimate analyze(const SparseMatrix& A, int block) { return chol_.analyze(A, block); }
   bool factor(const SparseMatrix& A) { return chol_.factorize(A); }
   // x <- P^T L^-T x  and  x <- L^-1 P x
   template <class Dense>
@@ -45,7 +45,7 @@ constexpr const char* kFactorName = "Eigen SimplicialLDLT";
 // P A P^T = L D L^T; the split factor is L D^1/2.
 class Factor {
  public:
-  FactorEstimate analyze(const SparseMatrix&) { return {}; }  // unknown before factorizing
+  FactorEstimate analyze(const SparseMatrix&, int) { return {}; }  // unknown before factorizing
   bool factor(const SparseMatrix& A) {
     ldlt_.compute(A);
     if (ldlt_.info() != Eigen::Success || (ldlt_.vectorD().array() <= 0).any()) return false;
@@ -77,11 +77,12 @@ class SplitShiftInvert {
   SplitShiftInvert(const SparseMatrix& K, const SparseMatrix& M) : K_(K), M_(M), w_(K.rows()) {}
   Eigen::Index rows() const { return K_.rows(); }
   Eigen::Index cols() const { return K_.cols(); }
-  // The pattern of K - sigma M is the same for every sigma: analyzed once.
+  // The pattern of K - sigma M is the same for every sigma: analyzed once, ordered by nodes
+  // (three interleaved displacements each, as assemble() numbers them).
   FactorEstimate analyze() {
     SparseMatrix A = K_ - M_;
     A.makeCompressed();
-    return factor_.analyze(A);
+    return factor_.analyze(A, 3);
   }
   void factor(double sigma) {
     SparseMatrix A = K_ - sigma * M_;

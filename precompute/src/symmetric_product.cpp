@@ -1,5 +1,7 @@
 #include "symmetric_product.hpp"
 
+#include "huge_pages.hpp"
+
 #include <algorithm>
 #include <thread>
 #include <vector>
@@ -34,6 +36,7 @@ void rows(const SparseMatrix& A, const double* x, double* y, Eigen::Index b, Eig
 void symmetric_product(const SparseMatrix& A, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y) {
   const Eigen::Index n = A.rows();
   Y.resize(n, X.cols());
+  advise_huge_pages(Y.data(), sizeof(double) * std::size_t(Y.size()));
   constexpr Eigen::Index kChunk = 16;  // columns at a time: the row-major copies stay small
   const int threads = int(std::clamp<Eigen::Index>(std::thread::hardware_concurrency(), 1,
                                                    std::max<Eigen::Index>(1, n / 4096)));
