@@ -6,7 +6,9 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <numeric>
 
+#include "../precompute/src/cholmod_factor.hpp"
 #include "../precompute/src/symmetric_product.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/eigensolve.hpp"
@@ -25,6 +27,16 @@ const std::string kMeshes = CHLADNI_SHARED_MESHES;
 
 double hz(double omega) {
   return omega / (2 * std::numbers::pi);
+}
+
+// A steel box's P2 mesh within max_volume, and its matrices.
+std::pair<FemMesh, FemMatrices> steel_box(double max_volume) {
+  TetOptions t;
+  t.max_volume = max_volume;
+  const TetMesh tets = tetrahedralize(test::box_surface({0.3, 0.18, 0.12}, {4, 2, 2}), t);
+  FemMesh fem = make_fem_mesh(tets, 2);
+  FemMatrices km = assemble(fem, find_material("steel"), MassKind::Consistent);
+  return {std::move(fem), std::move(km)};
 }
 
 }  // namespace
@@ -216,11 +228,7 @@ TEST(ModalFem, BlockLanczosAndSpectraAgree) {
 // Gram-Schmidt pass with the DGKS repeat must keep the basis orthogonal), each an eigenpair to
 // the tolerance, and the symmetric block product the iteration uses equal to Eigen's.
 TEST(ModalFem, BlockLanczosModesAreMOrthonormalEigenpairs) {
-  TetOptions t;
-  t.max_volume = 4e-6;
-  const TetMesh tets = tetrahedralize(test::box_surface({0.3, 0.18, 0.12}, {4, 2, 2}), t);
-  const FemMesh fem = make_fem_mesh(tets, 2);
-  const FemMatrices km = assemble(fem, find_material("steel"), MassKind::Consistent);
+  const auto [fem, km] = steel_box(4e-6);
   ASSERT_GT(km.K.rows(), 3000);
   EigenOptions o;
   o.modes = 80;
@@ -242,6 +250,44 @@ TEST(ModalFem, BlockLanczosModesAreMOrthonormalEigenpairs) {
     EXPECT_LT((Y - E).norm(), 1e-13 * E.norm());
   }
 }
+
+#ifdef CHLADNI_HAVE_CHOLMOD
+// The factorization orders K - sigma M by its node graph (3 x 3 blocks): about the fill of
+// ordering the scalar matrix, and still a correct factor where the blocks are not nodes.
+TEST(ModalFem, NodeGraphOrderingFactorsCorrectly) {
+  const auto [fem, km] = steel_box(1e-5);
+  const Eigen::Index n = km.K.rows();
+  ASSERT_EQ(n % 3, 0);
+  SparseMatrix A = km.K + 1e7 * km.M;  // positive definite
+  A.makeCompressed();
+  // Nodes scattered: DOF d goes to (d * s) mod n, s coprime with n, so no 3 x 3 block is a node.
+  Eigen::Index s = 7919;
+  while (std::gcd(s, n) != 1) s += 2;
+  Eigen::VectorXi to(n);
+  for (Eigen::Index d = 0; d < n; ++d) to(d) = int((d * s) % n);
+  const Eigen::PermutationMatrix<Eigen::Dynamic> P(to);
+  SparseMatrix scattered;
+  scattered = A.twistedBy(P);
+  scattered.makeCompressed();
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(n);
+  double scalar_entries = 0;
+  for (int block : {1, 3}) {
+    for (const SparseMatrix* m : {&A, &scattered}) {
+      CholmodFactor f;
+      const FactorEstimate e = f.analyze(*m, block);
+      if (block == 1 && m == &A) scalar_entries = e.entries;
+      if (block == 3 && m == &A) {
+        EXPECT_LT(e.entries, 1.1 * scalar_entries);
+      }
+      ASSERT_TRUE(f.factorize(*m));
+      Eigen::VectorXd x = b;  // x <- P^T L^-T L^-1 P b = m^-1 b
+      f.lower_solve(x.data(), n, 1);
+      f.upper_solve(x.data(), n, 1);
+      EXPECT_LT((*m * x - b).norm(), 1e-9 * b.norm()) << "block " << block;
+    }
+  }
+}
+#endif
 
 // A box given as 12 triangles must get the elements the volume bound asks for (TetGen alone,
 // keeping the surface, would leave it 12 tetrahedra), and so the same modes as the same box
