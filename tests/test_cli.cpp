@@ -331,6 +331,24 @@ TEST(CliPrecompute, NoTransferLeavesXferOut) {
   EXPECT_TRUE(nlohmann::json::parse(r.output)["transfer"].is_null());
 }
 
+// Huge pages are an allocation hint only: with them turned off the modes are the same.
+TEST(CliPrecompute, HugePagesChangeNoMode) {
+  std::vector<double> hz[2];
+  for (int off : {0, 1}) {
+    const std::string json = chladni::test::temp_path("chladni_cli_huge.json");
+    const Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " +
+                             chladni::test::temp_path("chladni_cli_huge.chbank") +
+                             " --max-modes 20 --no-transfer -q --json " + json,
+                         off ? "CHLADNI_HUGE_PAGES=0" : "");
+    ASSERT_EQ(r.code, 0) << r.output;
+    hz[off] =
+        nlohmann::json::parse(std::ifstream(json))["frequencies_hz"].get<std::vector<double>>();
+  }
+  ASSERT_EQ(hz[0].size(), 20u);
+  ASSERT_EQ(hz[1].size(), 20u);
+  for (std::size_t i = 0; i < 20; ++i) EXPECT_NEAR(hz[0][i], hz[1][i], 1e-9 * hz[0][i]) << i;
+}
+
 // radiate on the bundled sphere: the JSON pressures against the exact solution
 // p = i rho0 c U h_l(kr) / h_l'(ka) P_l(cos t), via the sources and via the multipole series.
 TEST(CliRadiate, SphereHarmonicMatchesTheExactSolution) {

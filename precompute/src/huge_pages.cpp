@@ -18,6 +18,16 @@ namespace {
 constexpr std::size_t kHugePage = std::size_t(2) << 20;
 constexpr std::size_t kWorthIt = 2 * kHugePage;
 
+// CHLADNI_HUGE_PAGES=0 opts out: where THP's defrag setting makes faults on advised memory
+// compact memory synchronously, a fragmented machine could stall on them instead.
+bool wanted() {
+  static const bool on = [] {
+    const char* v = std::getenv("CHLADNI_HUGE_PAGES");
+    return !(v && std::strcmp(v, "0") == 0);
+  }();
+  return on;
+}
+
 #ifdef CHLADNI_HAVE_CHOLMOD
 void* huge_malloc(std::size_t bytes) {
   void* p = std::malloc(bytes);
@@ -46,7 +56,7 @@ void* huge_realloc(void* old, std::size_t bytes) {
 
 void advise_huge_pages(void* p, std::size_t bytes) {
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
-  if (!p || bytes < kWorthIt) return;
+  if (!p || bytes < kWorthIt || !wanted()) return;
   const auto begin = reinterpret_cast<std::uintptr_t>(p);
   const std::uintptr_t first = (begin + kHugePage - 1) & ~(kHugePage - 1);
   const std::uintptr_t last = (begin + bytes) & ~(kHugePage - 1);

@@ -10,7 +10,8 @@
 namespace chladni::precompute {
 
 /// Advise the kernel to back the 2 MB-aligned part of [p, p + bytes) with huge pages, before it
-/// is first touched. Small ranges and systems without THP are left alone; never fails.
+/// is first touched. Small ranges, systems without THP and CHLADNI_HUGE_PAGES=0 leave it alone;
+/// never fails.
 void advise_huge_pages(void* p, std::size_t bytes);
 
 /// Route SuiteSparse's (CHOLMOD's) allocations of 4 MB and more through advise_huge_pages.
