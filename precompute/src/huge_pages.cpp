@@ -73,7 +73,7 @@ void use_huge_pages_in_suitesparse() {
     SuiteSparse_config.malloc_func = huge_malloc;
     SuiteSparse_config.calloc_func = huge_calloc;
     SuiteSparse_config.realloc_func = huge_realloc;
-    SuiteSparse_config.free_func = std::free;
+    SuiteSparse_config.free_func = [](void* p) { std::free(p); };
   });
 #endif
 }
