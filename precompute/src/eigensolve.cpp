@@ -44,7 +44,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
   max_dim = std::min<Eigen::Index>(max_dim, n) / b * b;
   Eigen::MatrixXd V(
       n, std::min<Eigen::Index>(max_dim, std::max<Eigen::Index>(4 * b, 4 * want + 2 * b)));
-  advise_huge_pages(V.data(), sizeof(double) * std::size_t(V.size()));
+  advise_huge_pages(V);
   // T grows with V: max_dim is a memory bound (thousands of columns), not the usual size.
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(V.cols(), V.cols());
   std::mt19937 rng(12345);  // fixed: the same mesh gives the same modes
@@ -126,7 +126,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
     if (k + b > V.cols()) {
       const Eigen::Index cols = std::min<Eigen::Index>(max_dim, 2 * V.cols());
       V.conservativeResize(n, cols);
-      advise_huge_pages(V.data(), sizeof(double) * std::size_t(V.size()));
+      advise_huge_pages(V);
       T.conservativeResizeLike(Eigen::MatrixXd::Zero(cols, cols));
     }
     V.middleCols(k, b) = W;
@@ -375,8 +375,8 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
                      "(--max-tet-volume)");
   r.vectors.resize(n, Eigen::Index(r.lambda.size()));
   Eigen::MatrixXd Mk(n, r.vectors.cols());
-  advise_huge_pages(r.vectors.data(), sizeof(double) * std::size_t(r.vectors.size()));
-  advise_huge_pages(Mk.data(), sizeof(double) * std::size_t(Mk.size()));
+  advise_huge_pages(r.vectors);
+  advise_huge_pages(Mk);
   for (std::size_t i = 0; i < r.lambda.size(); ++i) {
     r.vectors.col(Eigen::Index(i)) = evecs.col(elastic[i]);
     Mk.col(Eigen::Index(i)) = Mv.col(elastic[i]);

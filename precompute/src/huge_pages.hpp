@@ -14,6 +14,12 @@ namespace chladni::precompute {
 /// never fails.
 void advise_huge_pages(void* p, std::size_t bytes);
 
+/// The same for a dense matrix's (or a sized vector's) elements.
+template <class Dense>
+void advise_huge_pages(Dense& m) {
+  advise_huge_pages(m.data(), sizeof(*m.data()) * std::size_t(m.size()));
+}
+
 /// Route SuiteSparse's (CHOLMOD's) allocations of 4 MB and more through advise_huge_pages.
 /// Idempotent and thread-safe; call before the first CHOLMOD call.
 void use_huge_pages_in_suitesparse();

@@ -35,8 +35,9 @@ void rows(const SparseMatrix& A, const double* x, double* y, Eigen::Index b, Eig
 
 void symmetric_product(const SparseMatrix& A, const Eigen::MatrixXd& X, Eigen::MatrixXd& Y) {
   const Eigen::Index n = A.rows();
+  const double* before = Y.data();
   Y.resize(n, X.cols());
-  advise_huge_pages(Y.data(), sizeof(double) * std::size_t(Y.size()));
+  if (Y.data() != before) advise_huge_pages(Y);  // only a fresh buffer is still untouched
   constexpr Eigen::Index kChunk = 16;  // columns at a time: the row-major copies stay small
   const int threads = int(std::clamp<Eigen::Index>(std::thread::hardware_concurrency(), 1,
                                                    std::max<Eigen::Index>(1, n / 4096)));
