@@ -163,6 +163,38 @@ TEST_P(FemOrder, LumpedMassIsDiagonalPositiveAndKeepsTheTotal) {
   EXPECT_GT(M.diagonal().minCoeff(), 0);
 }
 
+// M stores only the entries that can be nonzero (one direction with itself: a third of K's),
+// and is still the sum of the element mass matrices, which the factorization and the mass
+// products rely on.
+TEST_P(FemOrder, MassStoresAThirdOfTheEntriesAndEqualsTheElementSum) {
+  const FemMesh fem = make_fem_mesh(block_mesh(), GetParam());
+  const Material mat = steel();
+  const FemMatrices km = assemble(fem, mat, MassKind::Consistent, 2);
+  EXPECT_EQ(3 * km.M.nonZeros(), km.K.nonZeros());
+  const int npe = fem.nodes_per_element();
+  Eigen::MatrixXd M = Eigen::MatrixXd::Zero(Eigen::Index(fem.dofs()), Eigen::Index(fem.dofs()));
+  for (std::size_t e = 0; e < fem.element_count(); ++e) {
+    const uint32_t* en = &fem.elements[e * std::size_t(npe)];
+    const Vec3 x[4] = {fem.nodes[en[0]], fem.nodes[en[1]], fem.nodes[en[2]], fem.nodes[en[3]]};
+    Eigen::MatrixXd Me;
+    if (npe == 4) {
+      Mat12 K1, M1;
+      p1_element(x, mat.lame_lambda(), mat.lame_mu(), mat.density, K1, M1);
+      Me = M1;
+    } else {
+      Mat30 K2, M2;
+      p2_element(x, mat.lame_lambda(), mat.lame_mu(), mat.density, K2, M2);
+      Me = M2;
+    }
+    for (int a = 0; a < npe; ++a)
+      for (int b = 0; b < npe; ++b)
+        M.block<3, 3>(3 * en[a], 3 * en[b]) += Me.block<3, 3>(3 * a, 3 * b);
+  }
+  EXPECT_LT((dense(km.M) - M).cwiseAbs().maxCoeff(), 1e-12 * M.cwiseAbs().maxCoeff());
+  const FemMatrices lumped = assemble(fem, mat, MassKind::Lumped, 2);
+  EXPECT_EQ(lumped.M.nonZeros(), lumped.M.rows());
+}
+
 TEST_P(FemOrder, AssemblyIsDeterministicAndThreadCountOnlyReordersSums) {
   const FemMesh fem = make_fem_mesh(block_mesh(), GetParam());
   const FemMatrices a = assemble(fem, steel(), MassKind::Consistent, 3);

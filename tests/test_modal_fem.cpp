@@ -287,6 +287,29 @@ TEST(ModalFem, NodeGraphOrderingFactorsCorrectly) {
     }
   }
 }
+
+// K - sigma M is factorized from K and M without forming it: the solves are those of the sum,
+// and an added matrix with an entry outside the analyzed pattern is refused, not dropped.
+TEST(ModalFem, FactorizesASumWithoutFormingIt) {
+  const auto [fem, km] = steel_box(1e-5);
+  const Eigen::Index n = km.K.rows();
+  ASSERT_LT(km.M.nonZeros(), km.K.nonZeros());  // M's pattern is a part of K's
+  CholmodFactor f;
+  f.analyze(km.K, 3);
+  ASSERT_TRUE(f.factorize(km.K, 1e7, &km.M));
+  const Eigen::VectorXd b = Eigen::VectorXd::Random(n);
+  Eigen::VectorXd x = b;
+  f.lower_solve(x.data(), n, 1);
+  f.upper_solve(x.data(), n, 1);
+  EXPECT_LT((km.K * x + 1e7 * (km.M * x) - b).norm(), 1e-9 * b.norm());
+  EXPECT_FALSE(f.factorize(km.K, -1e12, &km.M));  // far below the lowest mode: indefinite
+  SparseMatrix outside(n, n);
+  outside.insert(0, n - 1) = 1.0;  // DOFs of nodes that share no element
+  outside.insert(n - 1, 0) = 1.0;
+  outside.makeCompressed();
+  ASSERT_EQ(km.K.coeff(0, n - 1), 0.0);
+  EXPECT_THROW(f.factorize(km.K, 1.0, &outside), InternalError);
+}
 #endif
 
 // A box given as 12 triangles must get the elements the volume bound asks for (TetGen alone,

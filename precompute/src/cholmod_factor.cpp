@@ -2,6 +2,7 @@
 
 #include <cholmod.h>
 
+#include <algorithm>
 #include <cstring>
 #include <initializer_list>
 #include <string>
@@ -28,9 +29,10 @@ std::string status_text(int status) {
   }
 }
 
-// A symmetric matrix (lower triangle read) over compressed columns in long indices; a pattern
-// only where x is null.
-cholmod_sparse lower_view(std::vector<SuiteSparse_long>& p, std::vector<SuiteSparse_long>& i,
+// A symmetric matrix given by its upper triangle over compressed columns in long indices; a
+// pattern only where x is null. Upper, not lower: CHOLMOD's supernodal factorization then makes
+// one permuted copy of it instead of two.
+cholmod_sparse upper_view(std::vector<SuiteSparse_long>& p, std::vector<SuiteSparse_long>& i,
                           double* x) {
   cholmod_sparse s{};
   s.nrow = s.ncol = p.size() - 1;
@@ -38,7 +40,7 @@ cholmod_sparse lower_view(std::vector<SuiteSparse_long>& p, std::vector<SuiteSpa
   s.p = p.data();
   s.i = i.data();
   s.x = x;
-  s.stype = -1;
+  s.stype = 1;
   s.itype = CHOLMOD_LONG;
   s.xtype = x ? CHOLMOD_REAL : CHOLMOD_PATTERN;
   s.dtype = CHOLMOD_DOUBLE;
@@ -52,15 +54,53 @@ cholmod_sparse lower_view(std::vector<SuiteSparse_long>& p, std::vector<SuiteSpa
 struct CholmodFactor::Impl {
   cholmod_common c;
   cholmod_factor* L = nullptr;
-  std::vector<SuiteSparse_long> p, i;  // the analyzed pattern, in CHOLMOD's long indices
+  // The upper triangle of the analyzed pattern, in CHOLMOD's long indices, and its values while
+  // a factorization runs: half of A's entries, and no full copy of A + beta B is ever formed.
+  std::vector<SuiteSparse_long> p, i;
+  std::vector<double> x;
   long n = 0;
 
-  // A view of A (lower triangle read) over the long-index copy of its pattern.
-  cholmod_sparse view(const SparseMatrix& A) {
+  void keep_upper_pattern(const SparseMatrix& A) {
     if (!A.isCompressed()) throw InternalError("CHOLMOD: the matrix must be compressed");
-    if (A.rows() != n || std::size_t(A.nonZeros()) != i.size())
-      throw InternalError("CHOLMOD: the matrix does not have the analyzed pattern");
-    return lower_view(p, i, const_cast<double*>(A.valuePtr()));
+    n = long(A.rows());
+    p.assign(std::size_t(n) + 1, 0);
+    i.clear();
+    for (long j = 0; j < n; ++j) {
+      for (SparseMatrix::InnerIterator it(A, Eigen::Index(j)); it; ++it)
+        if (it.row() <= j) i.push_back(it.row());
+      std::sort(i.begin() + p[std::size_t(j)], i.end());
+      p[std::size_t(j) + 1] = SuiteSparse_long(i.size());
+    }
+    i.shrink_to_fit();
+  }
+
+  // x = the upper triangle of A + beta B over the analyzed pattern, which is A's and holds B's.
+  void fill_upper(const SparseMatrix& A, double beta, const SparseMatrix* B) {
+    const char* differs = "CHOLMOD: the matrix does not have the analyzed pattern";
+    if (A.rows() != n || (B && B->rows() != n)) throw InternalError(differs);
+    x.assign(i.size(), 0.0);
+    std::vector<SuiteSparse_long> where(std::size_t(n), -1);  // row -> slot in this column
+    for (long j = 0; j < n; ++j) {
+      const auto lo = std::size_t(p[std::size_t(j)]), hi = std::size_t(p[std::size_t(j) + 1]);
+      for (std::size_t q = lo; q < hi; ++q) where[std::size_t(i[q])] = SuiteSparse_long(q);
+      std::size_t seen = 0;
+      for (SparseMatrix::InnerIterator it(A, Eigen::Index(j)); it; ++it) {
+        if (it.row() > j) continue;
+        const SuiteSparse_long q = where[std::size_t(it.row())];
+        if (q < 0) throw InternalError(differs);
+        x[std::size_t(q)] = it.value(), ++seen;
+      }
+      if (seen != hi - lo) throw InternalError(differs);
+      if (B)
+        for (SparseMatrix::InnerIterator it(*B, Eigen::Index(j)); it; ++it) {
+          if (it.row() > j) continue;
+          const SuiteSparse_long q = where[std::size_t(it.row())];
+          if (q < 0)
+            throw InternalError("CHOLMOD: the added matrix has entries outside the pattern");
+          x[std::size_t(q)] += beta * it.value();
+        }
+      for (std::size_t q = lo; q < hi; ++q) where[std::size_t(i[q])] = -1;
+    }
   }
 
   void check(bool ok, const char* what) {
@@ -93,15 +133,15 @@ struct CholmodFactor::Impl {
     const long nb = n / block;
     std::vector<SuiteSparse_long> gp(std::size_t(nb) + 1, 0), gi;
     gi.reserve(i.size() / std::size_t(block * block));
+    // Column c * block holds every block row r <= c of block column c (rows sorted).
     for (long c = 0; c < nb; ++c) {
       for (SuiteSparse_long q = p[std::size_t(c * block)]; q < p[std::size_t(c * block) + 1]; ++q) {
-        const SuiteSparse_long r = i[std::size_t(q)] / block;  // rows are sorted
-        if (r >= c && (gi.size() == std::size_t(gp[std::size_t(c)]) || gi.back() != r))
-          gi.push_back(r);
+        const SuiteSparse_long r = i[std::size_t(q)] / block;
+        if (gi.size() == std::size_t(gp[std::size_t(c)]) || gi.back() != r) gi.push_back(r);
       }
       gp[std::size_t(c) + 1] = SuiteSparse_long(gi.size());
     }
-    cholmod_sparse g = lower_view(gp, gi, nullptr);
+    cholmod_sparse g = upper_view(gp, gi, nullptr);
     cholmod_factor* Lg = analyze_with(g, {CHOLMOD_AMD, CHOLMOD_METIS}, nullptr);
     std::vector<SuiteSparse_long> perm;
     if (Lg && c.status >= CHOLMOD_OK) {
@@ -150,10 +190,8 @@ CholmodFactor::~CholmodFactor() {
 FactorEstimate CholmodFactor::analyze(const SparseMatrix& A, int block) {
   Impl& m = *impl_;
   if (m.L) cholmod_l_free_factor(&m.L, &m.c);
-  m.n = A.rows();
-  m.p.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.outerSize() + 1);
-  m.i.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-  cholmod_sparse s = m.view(A);
+  m.keep_upper_pattern(A);
+  cholmod_sparse s = upper_view(m.p, m.i, nullptr);
   std::vector<SuiteSparse_long> perm =
       block > 1 && m.n % block == 0 ? m.block_ordering(block) : std::vector<SuiteSparse_long>{};
   m.L =
@@ -162,18 +200,21 @@ FactorEstimate CholmodFactor::analyze(const SparseMatrix& A, int block) {
   FactorEstimate e;
   e.entries = m.c.lnz;
   e.flops = m.c.fl;
-  // Supernodal: xsize values (explicit zeros within supernodes included) and ssize indices.
-  const double values = m.L->is_super ? double(m.L->xsize) : m.c.lnz;
+  // Supernodal: xsize values (explicit zeros within supernodes included), ssize indices, and the
+  // largest update matrix, the numeric factorization's workspace.
+  const double values = m.L->is_super ? double(m.L->xsize + m.L->maxcsize) : m.c.lnz;
   const double indices = m.L->is_super ? double(m.L->ssize) : m.c.lnz;
   e.bytes = 8.0 * values + double(sizeof(SuiteSparse_long)) * indices;
   return e;
 }
 
-bool CholmodFactor::factorize(const SparseMatrix& A) {
+bool CholmodFactor::factorize(const SparseMatrix& A, double beta, const SparseMatrix* B) {
   Impl& m = *impl_;
   if (!m.L) throw InternalError("CHOLMOD: factorize before analyze");
-  cholmod_sparse s = m.view(A);
+  m.fill_upper(A, beta, B);
+  cholmod_sparse s = upper_view(m.p, m.i, m.x.data());
   const int ok = cholmod_l_factorize(&s, m.L, &m.c);
+  std::vector<double>().swap(m.x);  // the factor holds A + beta B from here
   if (m.c.status == CHOLMOD_NOT_POSDEF) return false;
   m.check(ok != 0, "the numeric factorization");
   return m.L->minor == m.L->n;

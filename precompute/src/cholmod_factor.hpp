@@ -11,7 +11,7 @@ namespace chladni::precompute {
 
 struct FactorEstimate {
   double entries = 0;  ///< nonzeros of L
-  double bytes = 0;    ///< memory of the numeric factor (values and indices)
+  double bytes = 0;    ///< memory of the numeric factor (values, indices, workspace)
   double flops = 0;    ///< floating-point operations of one factorization
 };
 
@@ -22,14 +22,16 @@ class CholmodFactor {
   CholmodFactor(const CholmodFactor&) = delete;
   CholmodFactor& operator=(const CholmodFactor&) = delete;
 
-  /// Orders and analyzes the pattern of A (symmetric; its lower triangle is read). With
+  /// Orders and analyzes the pattern of A (symmetric, both triangles stored; the upper one is
+  /// kept, in long indices). With
   /// `block` > 1, A is made of dense block x block blocks (3: a node's displacements), and the
   /// ordering is found on the graph of the blocks, a ninth of the entries, then expanded. Throws
   /// InputError when CHOLMOD runs out of memory or the problem exceeds its index range.
   FactorEstimate analyze(const SparseMatrix& A, int block = 1);
-  /// Numeric factorization of A, which must have the analyzed pattern. False when A is not
-  /// positive definite; throws InputError on any other CHOLMOD failure.
-  bool factorize(const SparseMatrix& A);
+  /// Numeric factorization of A + beta B: A must have the analyzed pattern, B's must lie within
+  /// it (K - sigma M is factorized without a copy of it). False when the sum is not positive
+  /// definite; throws InputError on any other CHOLMOD failure.
+  bool factorize(const SparseMatrix& A, double beta = 0, const SparseMatrix* B = nullptr);
   /// Column-major x (rows x cols) in place: x <- P^T L^-T x, and x <- L^-1 P x.
   void upper_solve(double* x, long rows, long cols);
   void lower_solve(double* x, long rows, long cols);

@@ -141,10 +141,11 @@ std::string gigabytes(double bytes) {
   return buf;
 }
 
-// Bytes per stored entry of K besides the factor: K and M (a double and an int each), K - sigma
-// M while it is factorized (the same), CHOLMOD's long-index copy of its pattern and the
-// transposed copy CHOLMOD's factorization makes (a double and a long).
-constexpr double kMatrixBytesPerEntry = 12 + 12 + 12 + 8 + 16;
+// Bytes per stored entry of K besides the factor: K (a double and an int), M (the same for a
+// third of the entries), the upper triangle of K - sigma M in long indices while it is
+// factorized (a double and a long per entry, half the entries) and CHOLMOD's permuted copy of it
+// (the same).
+constexpr double kMatrixBytesPerEntry = 12 + 4 + 8 + 8;
 
 // The smallest basis worth factorizing for: modes asked for converge in about 3.3 vectors per
 // mode (352 for spot.obj's 106), so 4 per mode and two blocks; a band search may stop short

@@ -183,31 +183,38 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   if (nnz > std::size_t(std::numeric_limits<int>::max()))
     throw InputError("mesh too large: " + std::to_string(nnz) + " matrix entries");
 
-  // Column 3n + c holds rows 3m + r for m in nbr(n): 9 entries per node pair.
-  auto pattern = [&](SparseMatrix& A) {
+  // K: column 3n + c holds rows 3m + r for m in nbr(n), 9 entries per node pair. M couples a
+  // direction only with itself (m_ab I3, expand_mass), so it stores rows 3m + c only: a third of
+  // the memory and of the work of every mass product.
+  auto pattern = [&](SparseMatrix& A, int per_pair) {
+    const std::size_t entries = std::size_t(per_pair) * nbr.size();
     A.resize(int(3 * nn), int(3 * nn));
-    A.resizeNonZeros(int(nnz));
-    advise_huge_pages(A.valuePtr(), nnz * sizeof(double));
-    advise_huge_pages(A.innerIndexPtr(), nnz * sizeof(int));
+    A.resizeNonZeros(int(entries));
+    advise_huge_pages(A.valuePtr(), entries * sizeof(double));
+    advise_huge_pages(A.innerIndexPtr(), entries * sizeof(int));
     int* outer = A.outerIndexPtr();
     int* inner = A.innerIndexPtr();
+    const int rows = per_pair / 3;  // rows per node pair in one column
     for (std::size_t n = 0; n < nn; ++n) {
       const std::size_t deg = nptr[n + 1] - nptr[n];
       for (int c = 0; c < 3; ++c) {
-        const std::size_t start = 9 * nptr[n] + c * 3 * deg;
+        const std::size_t start = per_pair * nptr[n] + c * rows * deg;
         outer[3 * n + c] = int(start);
         for (std::size_t k = 0; k < deg; ++k)
-          for (int r = 0; r < 3; ++r) inner[start + 3 * k + r] = int(3 * nbr[nptr[n] + k] + r);
+          for (int r = 0; r < rows; ++r)
+            inner[start + rows * k + r] = int(3 * nbr[nptr[n] + k] + (rows == 3 ? r : c));
       }
     }
-    outer[3 * nn] = int(nnz);
+    outer[3 * nn] = int(entries);
   };
-  auto slot = [&](uint32_t row_node, uint32_t col_node, int c) {
+  // The slot of (row_node, 0) in column 3 col_node + c of K, and of (row_node, c) in M.
+  auto slot = [&](uint32_t row_node, uint32_t col_node, int c, int per_pair) {
     const uint32_t* b = &nbr[nptr[col_node]];
     const uint32_t* e = &nbr[nptr[col_node + 1]];
     const std::size_t rank = std::lower_bound(b, e, row_node) - b;
     const std::size_t deg = e - b;
-    return 9 * nptr[col_node] + c * 3 * deg + 3 * rank;
+    const int rows = per_pair / 3;
+    return per_pair * nptr[col_node] + c * rows * deg + rows * rank;
   };
 
   const double lambda = mat.lame_lambda(), mu = mat.lame_mu(), rho = mat.density;
@@ -218,9 +225,10 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   auto work = [&](int t) {
     try {
       for (auto* v : {&kv[t], &mv[t]}) {
-        v->reserve(nnz);
-        advise_huge_pages(v->data(), nnz * sizeof(double));
-        v->assign(nnz, 0.0);
+        const std::size_t entries = v == &kv[t] ? nnz : nnz / 3;
+        v->reserve(entries);
+        advise_huge_pages(v->data(), entries * sizeof(double));
+        v->assign(entries, 0.0);
       }
       Mat12 K1, M1;
       Mat30 K2, M2;
@@ -243,12 +251,10 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
         for (int b = 0; b < npe; ++b)
           for (int c = 0; c < 3; ++c)
             for (int a = 0; a < npe; ++a) {
-              const std::size_t s = slot(en[a], en[b], c);
+              const std::size_t s = slot(en[a], en[b], c, 9);
               const int col = 3 * b + c;
-              for (int r = 0; r < 3; ++r) {
-                kv[t][s + r] += Kp[col * ndof + 3 * a + r];
-                mv[t][s + r] += Mp[col * ndof + 3 * a + r];
-              }
+              for (int r = 0; r < 3; ++r) kv[t][s + r] += Kp[col * ndof + 3 * a + r];
+              mv[t][slot(en[a], en[b], c, 3)] += Mp[col * ndof + 3 * a + c];
             }
         if (t == 0 && progress && (e - lo) % 4096 == 0) progress(double(e - lo) / double(hi - lo));
       }
@@ -264,14 +270,19 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   if (error) std::rethrow_exception(error);
 
   FemMatrices out;
-  pattern(out.K);
-  pattern(out.M);
+  pattern(out.K, 9);
+  pattern(out.M, 3);
   double* kp = out.K.valuePtr();
   double* mp = out.M.valuePtr();
   for (std::size_t k = 0; k < nnz; ++k) {
-    double ks = 0, ms = 0;
-    for (int t = 0; t < nt; ++t) ks += kv[t][k], ms += mv[t][k];
-    kp[k] = ks, mp[k] = ms;
+    double sum = 0;
+    for (int t = 0; t < nt; ++t) sum += kv[t][k];
+    kp[k] = sum;
+  }
+  for (std::size_t k = 0; k < nnz / 3; ++k) {
+    double sum = 0;
+    for (int t = 0; t < nt; ++t) sum += mv[t][k];
+    mp[k] = sum;
   }
   if (mass_kind == MassKind::Lumped) {
     // HRZ lumping: keep the diagonal, scaled so that each direction keeps the total mass (row
@@ -286,6 +297,7 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
     for (int col = 0; col < out.M.outerSize(); ++col)
       for (SparseMatrix::InnerIterator it(out.M, col); it; ++it)
         it.valueRef() = it.row() == col ? it.value() * s : 0.0;
+    out.M.prune([](Eigen::Index row, Eigen::Index col, double) { return row == col; });
   }
   if (progress) progress(1.0);
   return out;

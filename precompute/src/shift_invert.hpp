@@ -25,7 +25,10 @@ constexpr const char* kFactorName = "CHOLMOD supernodal LLT";
 class Factor {
  public:
   FactorEstimate analyze(const SparseMatrix& A, int block) { return chol_.analyze(A, block); }
-  bool factor(const SparseMatrix& A) { return chol_.factorize(A); }
+  // A + beta B, B's pattern within A's
+  bool factor(const SparseMatrix& A, double beta, const SparseMatrix& B) {
+    return chol_.factorize(A, beta, &B);
+  }
   // x <- P^T L^-T x  and  x <- L^-1 P x
   template <class Dense>
   void upper_solve(Dense& x) {
@@ -46,8 +49,8 @@ constexpr const char* kFactorName = "Eigen SimplicialLDLT";
 class Factor {
  public:
   FactorEstimate analyze(const SparseMatrix&, int) { return {}; }  // unknown before factorizing
-  bool factor(const SparseMatrix& A) {
-    ldlt_.compute(A);
+  bool factor(const SparseMatrix& A, double beta, const SparseMatrix& B) {
+    ldlt_.compute(SparseMatrix(A + beta * B));
     if (ldlt_.info() != Eigen::Success || (ldlt_.vectorD().array() <= 0).any()) return false;
     sqrt_d_ = ldlt_.vectorD().array().sqrt();
     return true;
@@ -77,17 +80,12 @@ class SplitShiftInvert {
   SplitShiftInvert(const SparseMatrix& K, const SparseMatrix& M) : K_(K), M_(M), w_(K.rows()) {}
   Eigen::Index rows() const { return K_.rows(); }
   Eigen::Index cols() const { return K_.cols(); }
-  // The pattern of K - sigma M is the same for every sigma: analyzed once, ordered by nodes
-  // (three interleaved displacements each, as assemble() numbers them).
-  FactorEstimate analyze() {
-    SparseMatrix A = K_ - M_;
-    A.makeCompressed();
-    return factor_.analyze(A, 3);
-  }
+  // The pattern of K - sigma M is K's (assemble() gives M the same one; the factorization checks
+  // that M's lies within it) for every sigma: analyzed once, ordered by nodes (three interleaved
+  // displacements each, as assemble() numbers them).
+  FactorEstimate analyze() { return factor_.analyze(K_, 3); }
   void factor(double sigma) {
-    SparseMatrix A = K_ - sigma * M_;
-    A.makeCompressed();
-    if (!factor_.factor(A))
+    if (!factor_.factor(K_, -sigma, M_))
       throw InputError("the sparse factorization of K - sigma M (" + std::to_string(K_.rows()) +
                        " DOFs, " + std::to_string(K_.nonZeros()) +
                        " entries) failed: the problem is too large for the factorization or the "

@@ -28,7 +28,9 @@ FemMesh make_fem_mesh(const TetMesh& tets, int order);
 enum class MassKind { Consistent, Lumped };
 
 struct FemMatrices {
-  SparseMatrix K, M;  ///< full symmetric storage
+  /// Full symmetric storage. M stores only what can be nonzero: one direction coupled with
+  /// itself (m_ab I3), so a third of K's entries, and only the diagonal when lumped.
+  SparseMatrix K, M;
 };
 
 /// Assembles K and M with `threads` workers (0: all cores), each into its own copy of the shared
