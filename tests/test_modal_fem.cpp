@@ -251,6 +251,51 @@ TEST(ModalFem, BlockLanczosModesAreMOrthonormalEigenpairs) {
   }
 }
 
+// A band search returns converged modes only: stopped by --mode-cap, the first modes of the
+// band with small residuals; with a basis too small for the band, a refusal for memory, never
+// the unconverged Ritz pairs (which would be wrong modes); and with the band's size known, the
+// memory check refuses that before the factorization.
+TEST(ModalFem, BandSearchKeepsOnlyConvergedModes) {
+  const auto [fem, km] = steel_box(4e-6);
+  const Eigen::MatrixXd rigid = rigid_body_modes(fem.nodes);
+  EigenOptions o;
+  o.modes = 60;
+  const EigenResult first = solve_modes(km.K, km.M, rigid, o);
+  ASSERT_EQ(first.lambda.size(), 60u);
+  o.modes = 0;  // the band below the middle of the 50th and 51st modes: 50 modes
+  o.max_frequency = 0.5 * (hz(std::sqrt(first.lambda[49])) + hz(std::sqrt(first.lambda[50])));
+  const EigenResult band = solve_modes(km.K, km.M, rigid, o);
+  ASSERT_EQ(band.lambda.size(), 50u);
+  EXPECT_FALSE(band.capped);
+
+  o.mode_cap = 12;
+  const EigenResult capped = solve_modes(km.K, km.M, rigid, o);
+  ASSERT_EQ(capped.lambda.size(), 12u);
+  EXPECT_TRUE(capped.capped);
+  for (std::size_t i = 0; i < 12; ++i) {
+    EXPECT_LT(capped.residual[i], 1e-6) << "mode " << i;
+    EXPECT_NEAR(capped.lambda[i] / first.lambda[i], 1.0, 1e-8) << "mode " << i;
+  }
+
+  // A budget that leaves the smallest basis (4 blocks of 8) for the 56 modes of the band.
+  o.mode_cap = 2000;
+  const double n = double(km.K.rows());
+  o.max_memory = band.factor_bytes + band.matrix_bytes + 8.0 * n * 34.5;
+  try {
+    solve_modes(km.K, km.M, rigid, o);
+    ADD_FAILURE() << "a basis of 32 vectors cannot converge 56 modes";
+  } catch (const BudgetError& e) {
+    EXPECT_NE(std::string(e.what()).find("converged"), std::string::npos) << e.what();
+  }
+  o.expected_modes = 50;
+  try {
+    solve_modes(km.K, km.M, rigid, o);
+    ADD_FAILURE() << "the check should refuse before the factorization";
+  } catch (const BudgetError& e) {
+    EXPECT_NE(std::string(e.what()).find("would need"), std::string::npos) << e.what();
+  }
+}
+
 #ifdef CHLADNI_HAVE_CHOLMOD
 // The factorization orders K - sigma M by its node graph (3 x 3 blocks): about the fill of
 // ordering the scalar matrix, and still a correct factor where the blocks are not nodes.

@@ -27,18 +27,20 @@ namespace chladni::precompute {
 namespace {
 
 // Block Lanczos with full reorthogonalization on C (symmetric, eigenvalues theta > 0), for the
-// largest theta: the `want` largest, or (want = 0) all above theta_min. Spectra's Lanczos is
-// single-vector; applying C to blocks of vectors turns the triangular solves and the mass
-// product, which dominate, from matrix-vector into matrix-matrix work (about 4x faster here).
+// largest theta: the `want` largest, or (want = 0) all above theta_min, at most `cap`. Spectra's
+// Lanczos is single-vector; applying C to blocks of vectors turns the triangular solves and the
+// mass product, which dominate, from matrix-vector into matrix-matrix work (about 4x faster here).
 struct BlockLanczosResult {
   Eigen::VectorXd theta;  ///< descending
   Eigen::MatrixXd Y;      ///< Ritz vectors (orthonormal)
   std::size_t applied = 0;
+  Eigen::Index done = 0;  ///< converged pairs among theta
   bool converged = false;
+  bool capped = false;  ///< `cap` pairs found and the band goes on
 };
 
 BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, double theta_min,
-                                 double tol, Eigen::Index max_dim, Eigen::Index b,
+                                 Eigen::Index cap, double tol, Eigen::Index max_dim, Eigen::Index b,
                                  const std::function<void(const std::string&)>& status) {
   const Eigen::Index n = op.rows();
   max_dim = std::min<Eigen::Index>(max_dim, n) / b * b;
@@ -104,23 +106,30 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
     const Eigen::VectorXd res = (R * S.bottomRows(b)).colwise().norm();
     Eigen::Index wanted = 0, done = 0;
     for (Eigen::Index i = 0; i < k; ++i) {
-      const bool in = want > 0 ? i < want : theta(i) >= theta_min;
+      const bool in = want > 0 ? i < want : theta(i) >= theta_min && i < cap;
       if (!in) break;
       ++wanted;
       done += res(i) <= tol * theta(i);
     }
     // By threshold: also require the first Ritz value below it to be converged, so that no
-    // unconverged one can still rise above it; and a basis well past the wanted count, so that
-    // a multiplet wider than the block has had room to appear.
+    // unconverged one can still rise above it (at the cap, the `cap` largest are wanted, as by
+    // count); and a basis well past the wanted count, so that a multiplet wider than the block
+    // has had room to appear.
     const bool bracketed =
-        (want > 0 || (wanted < k && res(wanted) <= tol * theta(wanted))) && k >= wanted + 2 * b;
+        (want > 0 || wanted == cap || (wanted < k && res(wanted) <= tol * theta(wanted))) &&
+        k >= wanted + 2 * b;
     if (status && (k / b) % 8 == 0)
       status("block Lanczos: " + std::to_string(k) + " vectors, " + std::to_string(done) + " of " +
              std::to_string(wanted) + " wanted modes converged");
     if ((wanted > 0 && done == wanted && bracketed && (want == 0 || wanted == want)) || full) {
       out.converged = done == wanted && bracketed;
+      out.done = done;
+      out.capped = want == 0 && wanted == cap && wanted < k && theta(wanted) >= theta_min;
       out.theta = theta.head(wanted);
-      out.Y = V.leftCols(k) * S.leftCols(wanted);
+      if (!out.converged) return out;  // refused by the caller: no Ritz vectors needed
+      out.Y.resize(n, wanted);
+      advise_huge_pages(out.Y);
+      out.Y.noalias() = V.leftCols(k) * S.leftCols(wanted);
       return out;
     }
     if (k + b > V.cols()) {
@@ -141,47 +150,71 @@ std::string gigabytes(double bytes) {
   return buf;
 }
 
-// Bytes per stored entry of K besides the factor: K (a double and an int), M (the same for a
-// third of the entries), the upper triangle of K - sigma M in long indices while it is
-// factorized (a double and a long per entry, half the entries) and CHOLMOD's permuted copy of it
-// (the same).
-constexpr double kMatrixBytesPerEntry = 12 + 4 + 8 + 8;
+// The eigen-solve's memory has two peaks besides the factor. Factorizing: K (a double and an int
+// per entry), M (the same for a third of the entries), the upper triangle of K - sigma M in long
+// indices (a double and a long for half the entries) and CHOLMOD's permuted copy of it (the
+// same): 32 bytes per entry of K. Iterating: K, M and the kept pattern (20 bytes per entry), the
+// Lanczos basis and the Ritz vectors (the modes).
+constexpr double kFactorizingBytesPerEntry = 12 + 4 + 8 + 8;
+constexpr double kIteratingBytesPerEntry = 12 + 4 + 4;
 
-// The smallest basis worth factorizing for: modes asked for converge in about 3.3 vectors per
-// mode (352 for spot.obj's 106), so 4 per mode and two blocks; a band search may stop short
-// (capped) instead.
+// The modes the Lanczos run must hold, the six rigid ones included: those asked for, or those
+// expected below max_frequency within the cap; 0 where unknown (a band of unknown size).
+Eigen::Index ritz_columns(Eigen::Index n, const EigenOptions& o) {
+  const std::size_t modes = o.modes > 0 ? o.modes : std::min(o.expected_modes, o.mode_cap);
+  return modes == 0 ? 0 : std::min<Eigen::Index>(n, Eigen::Index(modes) + 6);
+}
+
+// The smallest basis worth factorizing for: modes converge in about 3.3 vectors per mode (352
+// for spot.obj's 106), so 4 per mode and two blocks.
 Eigen::Index lanczos_floor(Eigen::Index n, const EigenOptions& o) {
-  if (o.modes > 0) return std::min<Eigen::Index>(n, 4 * (Eigen::Index(o.modes) + 6) + 2 * o.block);
-  return o.block * 4;
+  const Eigen::Index ritz = ritz_columns(n, o);
+  return std::min<Eigen::Index>(n, ritz > 0 ? 4 * ritz + 2 * o.block : 4 * o.block);
 }
 
-// Block Lanczos basis: n x dim doubles, room for 3 vectors per mode of the cap within 4 GB and
-// what the factor and the matrices leave of the budget, but never below lanczos_floor (the
-// budget check refuses that case).
-Eigen::Index lanczos_dim(Eigen::Index n, double reserved_bytes, const EigenOptions& o) {
+// The largest basis: twice the floor for the cap's modes (clusters of close modes, a cube's or
+// a box's, can take 6 vectors per mode where they are few), where the budget leaves room for it
+// after the factor, the matrices and the Ritz vectors (`reserved`), but never below the floor
+// (the budget check refuses that case). `by_memory` says whether the budget, not the count, set
+// it. The basis grows only as the iteration needs it.
+Eigen::Index lanczos_dim(Eigen::Index n, double reserved, const EigenOptions& o,
+                         bool* by_memory = nullptr) {
   const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
-  const double basis_cap = o.max_memory > 0 ? std::min(4e9, o.max_memory - reserved_bytes) : 4e9;
-  const Eigen::Index want_dim = std::max<Eigen::Index>(o.block * 4, 3 * max_nev + 64);
-  return std::min<Eigen::Index>(
-      n, std::max<Eigen::Index>(
-             lanczos_floor(n, o),
-             std::min<Eigen::Index>(want_dim, Eigen::Index(basis_cap / (8.0 * double(n))))));
+  const Eigen::Index target = std::min<Eigen::Index>(n, 8 * max_nev + 4 * o.block);
+  Eigen::Index dim = target;
+  if (o.max_memory > 0)
+    dim = std::min<Eigen::Index>(
+        dim, Eigen::Index(std::max(0.0, o.max_memory - reserved) / (8.0 * double(n))));
+  if (by_memory) *by_memory = dim < target;
+  return std::max(dim, lanczos_floor(n, o));
 }
 
-void check_budget(Eigen::Index n, const FactorEstimate& est, double matrix_bytes,
-                  double basis_bytes, const EigenOptions& o, const std::string& how,
-                  const char* amount = "about ") {
-  const double need = est.bytes + matrix_bytes + basis_bytes;
-  if (o.max_memory <= 0 || need <= o.max_memory) return;
-  throw BudgetError("the eigen-solve would need " + std::string(amount) + gigabytes(need) +
-                    " (the sparse factor of K - sigma M for " + std::to_string(n) + " DOFs: " +
-                    gigabytes(est.bytes) + ", nnz(L) " + std::to_string(std::llround(est.entries)) +
-                    ", " + std::to_string(std::llround(est.flops / 1e9)) +
-                    " GFLOP; the matrices and their copies: " + gigabytes(matrix_bytes) +
-                    "; the Lanczos basis: " + gigabytes(basis_bytes) + how +
-                    "), more than the memory budget of " + gigabytes(o.max_memory) +
-                    ": raise --max-tet-volume (coarser elements), lower --max-freq or "
-                    "--max-modes, or raise --max-memory");
+// What the eigen-solve needs at most: the factor with whichever phase is larger. Refuses
+// (BudgetError) above the budget, with the parts.
+double check_budget(Eigen::Index n, const FactorEstimate& est, double entries,
+                    const EigenOptions& o, const std::string& how, const char* amount = "about ") {
+  const double factorizing = kFactorizingBytesPerEntry * entries;
+  const double basis = 8.0 * double(n) * double(lanczos_floor(n, o) + ritz_columns(n, o));
+  const double iterating = kIteratingBytesPerEntry * entries + basis;
+  const double need = est.bytes + std::max(factorizing, iterating);
+  if (o.max_memory <= 0 || need <= o.max_memory) return need;
+  throw BudgetError(
+      "the eigen-solve would need " + std::string(amount) + gigabytes(need) +
+      " (the sparse factor of K - sigma M for " + std::to_string(n) +
+      " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " + std::to_string(std::llround(est.entries)) +
+      ", " + std::to_string(std::llround(est.flops / 1e9)) +
+      " GFLOP; the matrices and their copies while it is computed: " + gigabytes(factorizing) +
+      "; afterwards the matrices, the Lanczos basis and " + "the modes: " + gigabytes(iterating) +
+      how + "), more than the memory budget of " + gigabytes(o.max_memory) +
+      ": raise --max-tet-volume (coarser elements), lower --max-freq or "
+      "--max-modes, or raise --max-memory");
+}
+
+// The bytes the iteration may count on before the basis: the factor, the matrices and the
+// Ritz vectors.
+double iteration_reserve(Eigen::Index n, const FactorEstimate& est, double entries,
+                         const EigenOptions& o) {
+  return est.bytes + kIteratingBytesPerEntry * entries + 8.0 * double(n) * ritz_columns(n, o);
 }
 
 // Shift-invert Lanczos over the sparse factor: the lowest eigenpairs of K v = lambda M v, as
@@ -204,9 +237,10 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
                      std::to_string(o.mode_cap) + " is lower)");
   const FactorEstimate est = op.analyze();
   r.factor_entries = est.entries, r.factor_bytes = est.bytes, r.factor_flops = est.flops;
-  const double matrix_bytes = kMatrixBytesPerEntry * double(K.nonZeros());
-  r.matrix_bytes = matrix_bytes;
-  const Eigen::Index max_dim = lanczos_dim(n, est.bytes + matrix_bytes, o);
+  const double entries = double(K.nonZeros());
+  r.matrix_bytes = kFactorizingBytesPerEntry * entries;
+  bool by_memory = false;
+  const Eigen::Index max_dim = lanczos_dim(n, iteration_reserve(n, est, entries, o), o, &by_memory);
   r.basis_bytes = 8.0 * double(n) *
                   double(o.method == EigenOptions::Method::BlockLanczos
                              ? max_dim
@@ -215,7 +249,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
     status("factor: " + gigabytes(est.bytes) + " (nnz(L) " +
            std::to_string(std::llround(est.entries)) + ", " +
            std::to_string(std::llround(est.flops / 1e9)) + " GFLOP)");
-  check_budget(n, est, matrix_bytes, r.basis_bytes, o, "");
+  check_budget(n, est, entries, o, "");
   // Round-off on a badly shaped mesh can make K - sigma M indefinite along the rigid motions
   // when |sigma| is tiny next to K's scale: move the shift further down and retry.
   for (int attempt = 0;; ++attempt) {
@@ -234,17 +268,25 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
   t0 = std::chrono::steady_clock::now();
   if (o.method == EigenOptions::Method::BlockLanczos) {
     const double theta_min = 1.0 / (lambda_max - sigma);
-    const BlockLanczosResult bl =
-        block_lanczos(op, o.modes > 0 ? nev : 0, theta_min, o.tolerance, max_dim, o.block, status);
+    BlockLanczosResult bl = block_lanczos(op, o.modes > 0 ? nev : 0, theta_min, max_nev,
+                                          o.tolerance, max_dim, o.block, status);
     r.solves = 1;
     r.operations = bl.applied;
-    if (!bl.converged) {
-      if (o.modes > 0)
-        throw InternalError("block Lanczos did not converge for " + std::to_string(nev) + " modes");
-      r.capped = true;
-    }
+    // The basis filled what the budget leaves before the modes converged: the unconverged Ritz
+    // pairs would be wrong modes, so this is a refusal, as the budget check's is.
+    if (!bl.converged && !by_memory)
+      throw InternalError("block Lanczos did not converge " + std::to_string(bl.theta.size()) +
+                          " modes within " + std::to_string(max_dim) + " vectors");
+    if (!bl.converged)
+      throw BudgetError("the Lanczos basis the memory budget leaves (" + std::to_string(max_dim) +
+                        " vectors, " + gigabytes(r.basis_bytes) + ") converged " +
+                        std::to_string(bl.done) + " of the " + std::to_string(bl.theta.size()) +
+                        (o.modes > 0 ? " modes asked for" : " modes found below --max-freq") +
+                        ": lower --max-freq or --max-modes, raise --max-tet-volume (coarser "
+                        "elements), or raise --max-memory");
+    r.capped = bl.capped;
     evals = (1.0 / bl.theta.array() + sigma).matrix();
-    evecs = bl.Y;
+    evecs = std::move(bl.Y);
   } else {
     for (;;) {
       const Eigen::Index ncv =
@@ -397,8 +439,8 @@ namespace {
 
 // CHOLMOD's analysis of the node graph, where each element couples all its nodes. K's pattern is
 // this graph with each entry a 3 x 3 block, so its factor has 9 times the entries and 27 times
-// the flops. `matrices` receives the bytes of K, M and their copies.
-FactorEstimate node_graph_estimate(const FemMesh& mesh, double& matrices) {
+// the flops. `entries` receives the entries of K.
+FactorEstimate node_graph_estimate(const FemMesh& mesh, double& entries) {
   const int npe = mesh.nodes_per_element();
   std::vector<Eigen::Triplet<double, int>> t;
   t.reserve(mesh.element_count() * std::size_t(npe * npe));
@@ -415,7 +457,7 @@ FactorEstimate node_graph_estimate(const FemMesh& mesh, double& matrices) {
   Factor f;
   FactorEstimate est = f.analyze(G, 1);
   est.entries *= 9, est.bytes *= 9, est.flops *= 27;
-  matrices = kMatrixBytesPerEntry * 9.0 * double(G.nonZeros());
+  entries = 9.0 * double(G.nonZeros());
   return est;
 }
 
@@ -423,13 +465,11 @@ FactorEstimate node_graph_estimate(const FemMesh& mesh, double& matrices) {
 
 double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o) {
   if (o.max_memory <= 0) return 0;
-  double matrices = 0;
-  const FactorEstimate est = node_graph_estimate(mesh, matrices);
+  double entries = 0;
+  const FactorEstimate est = node_graph_estimate(mesh, entries);
   if (est.bytes <= 0) return 0;  // this build's factorization cannot say before factorizing
-  const Eigen::Index n = Eigen::Index(mesh.dofs());
-  const double basis = 8.0 * double(n) * double(lanczos_dim(n, est.bytes + matrices, o));
-  check_budget(n, est, matrices, basis, o, "; estimated from the mesh before assembly");
-  return est.bytes + matrices + basis;
+  return check_budget(Eigen::Index(mesh.dofs()), est, entries, o,
+                      "; estimated from the mesh before assembly");
 }
 
 double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& sample,
@@ -442,8 +482,8 @@ double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& s
   const bool p2 = sample.nodes_per_element() == 10;
   const double n =
       std::max(ns, std::min(p2 ? 3.6 : 0.4, ns / double(sample.element_count())) * tetrahedra);
-  double matrices = 0;
-  FactorEstimate est = node_graph_estimate(sample, matrices);
+  double entries = 0;
+  FactorEstimate est = node_graph_estimate(sample, entries);
   if (est.bytes <= 0) return 0;
   // Nested dissection's factor grows as n^(4/3) in a solid and n log n in a shell, and a thin
   // part grows faster once its thickness is resolved: the growth between the two meshes,
@@ -458,16 +498,13 @@ double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& s
     af = std::clamp(std::log(est.flops / low.flops) / rs, 1.0, 2.0);
   }
   est.entries *= std::exp(a * r), est.bytes *= std::exp(a * r), est.flops *= std::exp(af * r);
-  matrices *= n / ns;
-  const auto ni = Eigen::Index(n);
-  const double basis = 8.0 * n * double(lanczos_dim(ni, est.bytes + matrices, o));
-  check_budget(ni, est, matrices, basis, o,
-               "; a lower bound found before meshing, from meshes of " +
-                   std::to_string(coarse.element_count()) + " and " +
-                   std::to_string(sample.element_count()) + " tetrahedra extrapolated to " +
-                   std::to_string(std::llround(tetrahedra)),
-               "at least ");
-  return est.bytes + matrices + basis;
+  entries *= n / ns;
+  return check_budget(Eigen::Index(n), est, entries, o,
+                      "; a lower bound found before meshing, from meshes of " +
+                          std::to_string(coarse.element_count()) + " and " +
+                          std::to_string(sample.element_count()) + " tetrahedra extrapolated to " +
+                          std::to_string(std::llround(tetrahedra)),
+                      "at least ");
 }
 
 }  // namespace chladni::precompute

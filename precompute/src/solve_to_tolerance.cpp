@@ -177,8 +177,11 @@ double band_modes(const SurfaceMesh& surface, double volume, const PrecomputeOpt
 }  // namespace
 
 FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& o,
-                           const EigenOptions& eo, const Progress& p, Stopwatch& sw,
+                           const EigenOptions& eigen, const Progress& p, Stopwatch& sw,
                            PrecomputeReport& r, SurfaceMesh& first) {
+  EigenOptions eo = eigen;
+  if (o.max_modes == 0)
+    eo.expected_modes = std::size_t(std::llround(band_modes(surface, std::abs(r.mesh.volume), o)));
   const bool chosen = o.max_tet_volume > 0;
   double volume = o.max_tet_volume;
   if (!chosen)

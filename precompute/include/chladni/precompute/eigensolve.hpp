@@ -14,8 +14,11 @@ struct EigenOptions {
   std::size_t modes = 0;         ///< first N elastic modes; 0: all below max_frequency
   double max_frequency = 20000;  ///< Hz, undamped; used when modes == 0
   std::size_t mode_cap = 2000;   ///< most elastic modes ever computed
-  double shift_hz = 20;          ///< sigma = -(2 pi shift_hz)^2: below zero, so K - sigma M is SPD
-  double tolerance = 1e-8;       ///< relative Ritz residual at convergence
+  /// With modes == 0: about how many modes lie below max_frequency (Weyl's law; 0: unknown).
+  /// The memory check then counts a Lanczos basis that can hold them.
+  std::size_t expected_modes = 0;
+  double shift_hz = 20;     ///< sigma = -(2 pi shift_hz)^2: below zero, so K - sigma M is SPD
+  double tolerance = 1e-8;  ///< relative Ritz residual at convergence
   /// BlockLanczos (default): our block Lanczos on the same operator, blocks of `block` vectors.
   /// Spectra: Spectra's SymEigsSolver (single-vector implicitly restarted Lanczos).
   enum class Method { BlockLanczos, Spectra };
