@@ -204,8 +204,8 @@ double check_budget(Eigen::Index n, const FactorEstimate& est, double entries,
       " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " + std::to_string(std::llround(est.entries)) +
       ", " + std::to_string(std::llround(est.flops / 1e9)) +
       " GFLOP; the matrices and their copies while it is computed: " + gigabytes(factorizing) +
-      "; afterwards the matrices, the Lanczos basis and " + "the modes: " + gigabytes(iterating) +
-      how + "), more than the memory budget of " + gigabytes(o.max_memory) +
+      "; afterwards the matrices, the Lanczos basis and the modes: " + gigabytes(iterating) + how +
+      "), more than the memory budget of " + gigabytes(o.max_memory) +
       ": raise --max-tet-volume (coarser elements), lower --max-freq or "
       "--max-modes, or raise --max-memory");
 }
@@ -272,8 +272,8 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
                                           o.tolerance, max_dim, o.block, status);
     r.solves = 1;
     r.operations = bl.applied;
-    // The basis filled what the budget leaves before the modes converged: the unconverged Ritz
-    // pairs would be wrong modes, so this is a refusal, as the budget check's is.
+    // Unconverged Ritz pairs would be wrong modes. Where the budget set the basis, this is a
+    // refusal for memory, as the budget check's is.
     if (!bl.converged && !by_memory)
       throw InternalError("block Lanczos did not converge " + std::to_string(bl.theta.size()) +
                           " modes within " + std::to_string(max_dim) + " vectors");

@@ -24,10 +24,11 @@ struct EigenOptions {
   enum class Method { BlockLanczos, Spectra };
   Method method = Method::BlockLanczos;
   Eigen::Index block = 8;
-  /// Bytes the factor, K and M with the copies the factorization makes, and the Lanczos basis
-  /// may take together; 0: no limit. The symbolic analysis says what the factor needs before
-  /// any of it is allocated; above the budget solve_modes refuses (BudgetError) with the
-  /// numbers.
+  /// Bytes the eigen-solve may take at its peak (the factor, with K and M and either the copies
+  /// the factorization makes or the Lanczos basis and the modes); 0: no limit. The symbolic
+  /// analysis says what the factor needs before any of it is allocated; above the budget, or
+  /// when the basis the budget leaves fills before the modes converge, solve_modes refuses
+  /// (BudgetError) with the numbers.
   double max_memory = 0;
 };
 
