@@ -20,8 +20,7 @@ for name in "${names[@]}"; do
   # solved one mesh. A locally refined run's mean volume hides its small tets (a uniform mesh at
   # a third of it can need tens of GB: bell, rotor), so there the first 20 modes are refined
   # locally to a third of the default run's worst estimate over them instead, but not below 0.15 %
-  # (an estimate of 0.15 % suffices to check 1 %; a third of the coupling's
-  # 0.24 % did not fit this machine).
+  # (an estimate of 0.15 % suffices to check 1 %, and the coupling's reference then fits 24 GB).
   ref=$(python3 -c "
 import json, sys
 j = json.load(open(sys.argv[1]))
