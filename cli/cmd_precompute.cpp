@@ -73,6 +73,7 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                 {"factor_nonzeros", r.eigen.factor_entries},
                 {"factor_bytes", r.eigen.factor_bytes},
                 {"factor_flops", r.eigen.factor_flops},
+                {"factor_seconds_estimate", r.eigen.factor_seconds_estimate},
                 {"matrix_bytes", r.eigen.matrix_bytes},
                 {"basis_bytes", r.eigen.basis_bytes}};
   j["modes"] = {{"kept", r.kept},

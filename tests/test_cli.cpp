@@ -125,6 +125,9 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
   EXPECT_GT(j["eigen"]["factor_bytes"].get<double>(),
             8 * j["eigen"]["factor_nonzeros"].get<double>() - 1);
   EXPECT_GT(j["eigen"]["factor_flops"].get<double>(), 0.0);
+  // And predicts its time from the flops and the BLAS's measured rate: seconds for the bar.
+  EXPECT_GT(j["eigen"]["factor_seconds_estimate"].get<double>(), 0.0);
+  EXPECT_LT(j["eigen"]["factor_seconds_estimate"].get<double>(), 60.0);
 
   r = run("info " + bank + " --json");
   ASSERT_EQ(r.code, 0) << r.output;
