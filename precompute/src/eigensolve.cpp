@@ -45,9 +45,9 @@ double blas_rate() {
   return rate;
 }
 
-// CHOLMOD's supernodal factorization, its analysis included, runs its flops at about this share
-// of the dense product's rate (measured here: 0.2 on spot.obj's 28 GFLOP, 0.36 on the rotor's
-// 3,820; small supernodes run slower), so the estimate is rough, within a factor of two.
+// CHOLMOD's numeric supernodal factorization runs its flops at about this share of the dense
+// product's rate (measured here: 0.17 on spot.obj's 28 GFLOP, 0.2 on the bell's 213, 0.36 on the
+// rotor's 3,820; small supernodes run slower), so the estimate is rough, within a factor of two.
 constexpr double kSupernodalEfficiency = 0.25;
 
 // Block Lanczos with full reorthogonalization on C (symmetric, eigenvalues theta > 0), for the

@@ -46,8 +46,8 @@ struct EigenResult {
   double factor_seconds = 0, lanczos_seconds = 0;
   /// From the symbolic analysis (0 where the factorization cannot say in advance).
   double factor_entries = 0, factor_bytes = 0, factor_flops = 0;
-  /// The factorization's time predicted from its flops and the BLAS's measured dense rate
-  /// (rough: within about a factor of two).
+  /// The numeric factorization's time predicted from its flops and the BLAS's measured dense
+  /// rate (rough: within about a factor of two; factor_seconds also holds the analysis).
   double factor_seconds_estimate = 0;
   double matrix_bytes = 0;   ///< K, M and the copies the factorization makes
   double basis_bytes = 0;    ///< the Lanczos basis' share of memory
