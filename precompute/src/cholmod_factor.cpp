@@ -80,25 +80,22 @@ struct CholmodFactor::Impl {
     if (A.rows() != n || (B && B->rows() != n)) throw InternalError(differs);
     x.assign(i.size(), 0.0);
     std::vector<SuiteSparse_long> where(std::size_t(n), -1);  // row -> slot in this column
+    // Adds scale * S's upper column j at its slots; returns how many entries it added.
+    auto add = [&](const SparseMatrix& S, long j, double scale, const char* outside) {
+      std::size_t added = 0;
+      for (SparseMatrix::InnerIterator it(S, Eigen::Index(j)); it; ++it) {
+        if (it.row() > j) continue;
+        const SuiteSparse_long q = where[std::size_t(it.row())];
+        if (q < 0) throw InternalError(outside);
+        x[std::size_t(q)] += scale * it.value(), ++added;
+      }
+      return added;
+    };
     for (long j = 0; j < n; ++j) {
       const auto lo = std::size_t(p[std::size_t(j)]), hi = std::size_t(p[std::size_t(j) + 1]);
       for (std::size_t q = lo; q < hi; ++q) where[std::size_t(i[q])] = SuiteSparse_long(q);
-      std::size_t seen = 0;
-      for (SparseMatrix::InnerIterator it(A, Eigen::Index(j)); it; ++it) {
-        if (it.row() > j) continue;
-        const SuiteSparse_long q = where[std::size_t(it.row())];
-        if (q < 0) throw InternalError(differs);
-        x[std::size_t(q)] = it.value(), ++seen;
-      }
-      if (seen != hi - lo) throw InternalError(differs);
-      if (B)
-        for (SparseMatrix::InnerIterator it(*B, Eigen::Index(j)); it; ++it) {
-          if (it.row() > j) continue;
-          const SuiteSparse_long q = where[std::size_t(it.row())];
-          if (q < 0)
-            throw InternalError("CHOLMOD: the added matrix has entries outside the pattern");
-          x[std::size_t(q)] += beta * it.value();
-        }
+      if (add(A, j, 1.0, differs) != hi - lo) throw InternalError(differs);
+      if (B) add(*B, j, beta, "CHOLMOD: the added matrix has entries outside the pattern");
       for (std::size_t q = lo; q < hi; ++q) where[std::size_t(i[q])] = -1;
     }
   }

@@ -16,7 +16,6 @@
 #include <fstream>
 #include <numbers>
 #include <random>
-#include <vector>
 
 #include "chladni/core/error.hpp"
 #include "eigensolve_dense.hpp"

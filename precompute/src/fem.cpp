@@ -185,7 +185,11 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
 
   // K: column 3n + c holds rows 3m + r for m in nbr(n), 9 entries per node pair. M couples a
   // direction only with itself (m_ab I3, expand_mass), so it stores rows 3m + c only: a third of
-  // the memory and of the work of every mass product.
+  // the memory and of the work of every mass product. `per_pair` (9 or 3) says which; a column
+  // holds per_pair / 3 rows per neighbour.
+  auto column_start = [&](int per_pair, std::size_t n, int c) {
+    return per_pair * nptr[n] + c * (per_pair / 3) * (nptr[n + 1] - nptr[n]);
+  };
   auto pattern = [&](SparseMatrix& A, int per_pair) {
     const std::size_t entries = std::size_t(per_pair) * nbr.size();
     A.resize(int(3 * nn), int(3 * nn));
@@ -194,27 +198,22 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
     advise_huge_pages(A.innerIndexPtr(), entries * sizeof(int));
     int* outer = A.outerIndexPtr();
     int* inner = A.innerIndexPtr();
-    const int rows = per_pair / 3;  // rows per node pair in one column
-    for (std::size_t n = 0; n < nn; ++n) {
-      const std::size_t deg = nptr[n + 1] - nptr[n];
+    const int rows = per_pair / 3;
+    for (std::size_t n = 0; n < nn; ++n)
       for (int c = 0; c < 3; ++c) {
-        const std::size_t start = per_pair * nptr[n] + c * rows * deg;
+        const std::size_t start = column_start(per_pair, n, c);
         outer[3 * n + c] = int(start);
-        for (std::size_t k = 0; k < deg; ++k)
+        for (std::size_t k = nptr[n]; k < nptr[n + 1]; ++k)
           for (int r = 0; r < rows; ++r)
-            inner[start + rows * k + r] = int(3 * nbr[nptr[n] + k] + (rows == 3 ? r : c));
+            inner[start + rows * (k - nptr[n]) + r] = int(3 * nbr[k] + (rows == 3 ? r : c));
       }
-    }
     outer[3 * nn] = int(entries);
   };
-  // The slot of (row_node, 0) in column 3 col_node + c of K, and of (row_node, c) in M.
-  auto slot = [&](uint32_t row_node, uint32_t col_node, int c, int per_pair) {
+  // Where row_node sits among col_node's sorted neighbours.
+  auto rank = [&](uint32_t row_node, uint32_t col_node) {
     const uint32_t* b = &nbr[nptr[col_node]];
     const uint32_t* e = &nbr[nptr[col_node + 1]];
-    const std::size_t rank = std::lower_bound(b, e, row_node) - b;
-    const std::size_t deg = e - b;
-    const int rows = per_pair / 3;
-    return per_pair * nptr[col_node] + c * rows * deg + rows * rank;
+    return std::size_t(std::lower_bound(b, e, row_node) - b);
   };
 
   const double lambda = mat.lame_lambda(), mu = mat.lame_mu(), rho = mat.density;
@@ -248,14 +247,18 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
           throw InputError("element " + std::to_string(e) + ": " + err.what());
         }
         const int ndof = 3 * npe;  // element matrices are column-major
-        for (int b = 0; b < npe; ++b)
-          for (int c = 0; c < 3; ++c)
+        for (int b = 0; b < npe; ++b) {
+          std::size_t at[10];  // each node's rank among node b's neighbours
+          for (int a = 0; a < npe; ++a) at[a] = rank(en[a], en[b]);
+          for (int c = 0; c < 3; ++c) {
+            const int col = 3 * b + c;
+            const std::size_t k0 = column_start(9, en[b], c), m0 = column_start(3, en[b], c);
             for (int a = 0; a < npe; ++a) {
-              const std::size_t s = slot(en[a], en[b], c, 9);
-              const int col = 3 * b + c;
-              for (int r = 0; r < 3; ++r) kv[t][s + r] += Kp[col * ndof + 3 * a + r];
-              mv[t][slot(en[a], en[b], c, 3)] += Mp[col * ndof + 3 * a + c];
+              for (int r = 0; r < 3; ++r) kv[t][k0 + 3 * at[a] + r] += Kp[col * ndof + 3 * a + r];
+              mv[t][m0 + at[a]] += Mp[col * ndof + 3 * a + c];
             }
+          }
+        }
         if (t == 0 && progress && (e - lo) % 4096 == 0) progress(double(e - lo) / double(hi - lo));
       }
     } catch (...) {
@@ -272,18 +275,16 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   FemMatrices out;
   pattern(out.K, 9);
   pattern(out.M, 3);
-  double* kp = out.K.valuePtr();
-  double* mp = out.M.valuePtr();
-  for (std::size_t k = 0; k < nnz; ++k) {
-    double sum = 0;
-    for (int t = 0; t < nt; ++t) sum += kv[t][k];
-    kp[k] = sum;
-  }
-  for (std::size_t k = 0; k < nnz / 3; ++k) {
-    double sum = 0;
-    for (int t = 0; t < nt; ++t) sum += mv[t][k];
-    mp[k] = sum;
-  }
+  auto sum_workers = [&](const std::vector<std::vector<double>>& parts, SparseMatrix& A) {
+    double* v = A.valuePtr();
+    for (std::size_t k = 0; k < std::size_t(A.nonZeros()); ++k) {
+      double sum = 0;
+      for (int t = 0; t < nt; ++t) sum += parts[t][k];
+      v[k] = sum;
+    }
+  };
+  sum_workers(kv, out.K);
+  sum_workers(mv, out.M);
   if (mass_kind == MassKind::Lumped) {
     // HRZ lumping: keep the diagonal, scaled so that each direction keeps the total mass (row
     // sums would give P2 corners negative mass).

@@ -164,12 +164,11 @@ double band_modes(const SurfaceMesh& surface, double volume, const PrecomputeOpt
   return std::max(solid, 0.5 * area * k2 / (4 * std::numbers::pi));
 }
 
-// A refusal of the whole band says how many modes it holds, so the user can ask for fewer.
-[[noreturn]] void refuse_band(const BudgetError& e, const SurfaceMesh& surface,
-                              const PrecomputeReport& r, const PrecomputeOptions& o) {
+// A refusal of the whole band says how many modes it holds (`band`, from band_modes), so the
+// user can ask for fewer.
+[[noreturn]] void refuse_band(const BudgetError& e, std::size_t band, const PrecomputeOptions& o) {
   if (o.max_modes > 0) throw e;
-  throw BudgetError(std::string(e.what()) + "; about " +
-                    std::to_string(std::llround(band_modes(surface, std::abs(r.mesh.volume), o))) +
+  throw BudgetError(std::string(e.what()) + "; about " + std::to_string(band) +
                     " modes lie below " + std::to_string(int(o.max_frequency)) +
                     " Hz: ask for the first N with --max-modes");
 }
@@ -202,7 +201,7 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     };
     tets = tetrahedralize(surface, first_options);
   } catch (const BudgetError& e) {
-    refuse_band(e, surface, r, o);
+    refuse_band(e, eo.expected_modes, o);
   }
   first.vertices.assign(tets.nodes.begin(),
                         tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
@@ -240,7 +239,7 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
       // many modes the band holds.
       const auto* budget = dynamic_cast<const BudgetError*>(&e);
       if (!budget) throw;
-      refuse_band(*budget, surface, r, o);
+      refuse_band(*budget, eo.expected_modes, o);
     }
     worst = worst_error(f, o);
     r.passes.push_back({f.tets.tets.size(), f.dofs, worst, seconds_since(t0), meshed});
