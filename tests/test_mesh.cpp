@@ -1,9 +1,11 @@
 // The validity checks on good and broken meshes, repair and tetrahedralization.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <numbers>
 #include <set>
 
 #include "chladni/core/error.hpp"
@@ -393,6 +395,40 @@ TEST(Tetrahedralize, FlatMeshesAreMadeAgainWithPointsOnTheSurface) {
     }
     const bool found = nearest < 1e-4 * size;
     ASSERT_TRUE(found) << "added surface point " << v << " is " << nearest / size << " off";
+  }
+}
+
+// A CAD box exports each face as two triangles: a 0.4 m x 4 mm face gives needles. Splitting
+// them alone keeps needles (about 50,000 tetrahedra with dihedral angles of 0.1 degrees here);
+// flipped within their plane they become a strip of well-shaped triangles, and the solid a few
+// hundred well-shaped tetrahedra, with the surface and the volume unchanged.
+TEST(Tetrahedralize, NeedleTrianglesOfACadBoxAreReshapedWithinTheirPlanes) {
+  const Vec3 size{0.4, 0.004, 0.004};
+  const SurfaceMesh rod = test::box_surface(size, {1, 1, 1});
+  ASSERT_EQ(rod.triangles.size(), 12u);
+  TetOptions o;
+  o.max_volume = size[0] * size[1] * size[2] / 300;
+  const TetMesh t = tetrahedralize(rod, o);
+  const TetQuality q = tet_quality(t);
+  EXPECT_NEAR(q.volume, 6.4e-6, 1e-15);
+  EXPECT_LT(q.max_radius_edge, 2.0);
+  EXPECT_GT(q.min_dihedral_deg, 10.0);
+  EXPECT_LT(t.tets.size(), 3000u);
+  const double edge = 1.5 * std::cbrt(6 * std::numbers::sqrt2 * o.max_volume);
+  for (const auto& f : t.surface_triangles) {
+    const Vec3 p[3] = {t.nodes[f[0]], t.nodes[f[1]], t.nodes[f[2]]};
+    for (int k = 0; k < 3; ++k) {
+      const Vec3 u = sub(p[(k + 1) % 3], p[k]), w = sub(p[(k + 2) % 3], p[k]);
+      const Vec3 c = cross(u, w);
+      ASSERT_LE(std::sqrt(dot(u, u)), edge * (1 + 1e-12));
+      ASSERT_GT(std::atan2(std::sqrt(dot(c, c)), dot(u, w)), 20 * std::numbers::pi / 180);
+    }
+  }
+  for (std::size_t v = 0; v < t.surface_vertices; ++v) {  // on a face of the box
+    int on = 0;
+    for (int k = 0; k < 3; ++k)
+      on += std::abs(t.nodes[v][k]) < 1e-15 || std::abs(t.nodes[v][k] - size[k]) < 1e-15;
+    ASSERT_GE(on, 1) << "surface node " << v;
   }
 }
 

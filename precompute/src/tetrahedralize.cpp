@@ -13,6 +13,7 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
+#include "split_long_edges.hpp"
 #include "tetgen_child.hpp"
 
 namespace chladni::precompute {
@@ -35,57 +36,6 @@ const char* tetgen_reason(int code) {
     default:
       return "unknown failure";
   }
-}
-
-// With -Y TetGen may not split surface triangles, and it then skips every interior point that
-// would encroach on a large one: a cube of 12 triangles stays 12 tetrahedra whatever the volume
-// bound. So surface edges longer than `max_edge` are split first (red-green: a triangle with
-// one long edge is bisected, with more it is split into four), keeping the surface's shape.
-SurfaceMesh split_long_edges(SurfaceMesh m, double max_edge) {
-  using Edge = std::pair<uint32_t, uint32_t>;
-  const auto key = [](uint32_t a, uint32_t b) { return Edge(std::min(a, b), std::max(a, b)); };
-  for (int pass = 0; pass < 64; ++pass) {
-    std::map<Edge, uint32_t> mid;  // marked edge -> its midpoint (assigned below)
-    for (const auto& t : m.triangles)
-      for (int k = 0; k < 3; ++k) {
-        const Vec3 d = sub(m.vertices[t[(k + 1) % 3]], m.vertices[t[k]]);
-        if (dot(d, d) > max_edge * max_edge) mid.emplace(key(t[k], t[(k + 1) % 3]), 0);
-      }
-    if (mid.empty()) return m;
-    for (bool grew = true; grew;) {  // closure: two marked edges mark the third
-      grew = false;
-      for (const auto& t : m.triangles) {
-        int marked = 0;
-        for (int k = 0; k < 3; ++k) marked += mid.count(key(t[k], t[(k + 1) % 3])) ? 1 : 0;
-        if (marked == 2)
-          for (int k = 0; k < 3; ++k) grew |= mid.emplace(key(t[k], t[(k + 1) % 3]), 0).second;
-      }
-    }
-    for (auto& [e, v] : mid) {
-      v = static_cast<uint32_t>(m.vertices.size());
-      m.vertices.push_back(scale(add(m.vertices[e.first], m.vertices[e.second]), 0.5));
-    }
-    std::vector<std::array<uint32_t, 3>> next;
-    for (const auto& t : m.triangles) {
-      std::array<int, 3> at{-1, -1, -1};  // midpoint of edge k (t[k], t[k+1])
-      int marked = 0;
-      for (int k = 0; k < 3; ++k)
-        if (auto it = mid.find(key(t[k], t[(k + 1) % 3])); it != mid.end())
-          at[k] = int(it->second), ++marked;
-      if (marked == 0) {
-        next.push_back(t);
-      } else if (marked == 3) {
-        const uint32_t ab = uint32_t(at[0]), bc = uint32_t(at[1]), ca = uint32_t(at[2]);
-        next.insert(next.end(), {{t[0], ab, ca}, {ab, t[1], bc}, {ca, bc, t[2]}, {ab, bc, ca}});
-      } else {
-        const int k = at[0] >= 0 ? 0 : at[1] >= 0 ? 1 : 2;
-        const uint32_t a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3], md = uint32_t(at[k]);
-        next.insert(next.end(), {{a, md, c}, {md, b, c}});
-      }
-    }
-    m.triangles = std::move(next);
-  }
-  return m;
 }
 
 double enclosed_volume(const SurfaceMesh& s) {
@@ -281,6 +231,9 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
                      ", more than the 20 million this tool meshes: raise "
                      "--max-tet-volume or lower --max-freq/--max-modes");
   }
+  // With -Y TetGen may not split surface triangles, and it then skips every interior point that
+  // would encroach on a large one: a cube of 12 triangles stays 12 tetrahedra whatever the
+  // volume bound. So long surface edges are split first.
   const SurfaceMesh s =
       o.max_volume > 0
           ? split_long_edges(input, 1.5 * std::cbrt(6 * std::numbers::sqrt2 * o.max_volume))
