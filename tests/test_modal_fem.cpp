@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <map>
 #include <numbers>
 #include <numeric>
@@ -354,6 +355,39 @@ TEST(ModalFem, FactorizesASumWithoutFormingIt) {
   outside.makeCompressed();
   ASSERT_EQ(km.K.coeff(0, n - 1), 0.0);
   EXPECT_THROW(f.factorize(km.K, 1.0, &outside), InternalError);
+}
+#endif
+
+#ifdef CHLADNI_HAVE_CHOLMOD
+// The memory check orders the node graph as the factorization would (AMD and METIS, the better
+// kept), so the factorization reuses its ordering: the same factor and modes, ordered once. Its
+// estimate is then the factor's own size.
+TEST(ModalFem, FactorizationReusesTheMemoryChecksOrdering) {
+  const auto [fem, km] = steel_box(1e-5);
+  EigenOptions o;
+  o.modes = 6;
+  o.max_memory = 1e12;
+  EigenOptions given = o;
+  check_eigen_memory(fem, o, &given.node_ordering);
+  ASSERT_EQ(given.node_ordering.size(), fem.nodes.size());
+  std::vector<std::int64_t> sorted = given.node_ordering;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t k = 0; k < sorted.size(); ++k) ASSERT_EQ(sorted[k], std::int64_t(k));
+  const Eigen::MatrixXd rigid = rigid_body_modes(fem.nodes);
+  const EigenResult own = solve_modes(km.K, km.M, rigid, o);
+  const EigenResult reused = solve_modes(km.K, km.M, rigid, given);
+  EXPECT_EQ(reused.factor_entries, own.factor_entries);
+  EXPECT_EQ(reused.factor_flops, own.factor_flops);
+  ASSERT_EQ(reused.lambda.size(), own.lambda.size());
+  for (std::size_t i = 0; i < own.lambda.size(); ++i)
+    EXPECT_NEAR(reused.lambda[i] / own.lambda[i], 1.0, 1e-10);
+  // A reversed ordering is honoured too: a different factor, the same modes.
+  EigenOptions reversed = given;
+  std::reverse(reversed.node_ordering.begin(), reversed.node_ordering.end());
+  const EigenResult other = solve_modes(km.K, km.M, rigid, reversed);
+  EXPECT_NE(other.factor_entries, own.factor_entries);
+  for (std::size_t i = 0; i < own.lambda.size(); ++i)
+    EXPECT_NEAR(other.lambda[i] / own.lambda[i], 1.0, 1e-9);
 }
 #endif
 

@@ -3,7 +3,9 @@
 // analysis comes first and reports what the numeric factorization will need (entries of L,
 // bytes, flops), so a caller can refuse before the memory is spent; factorizations then reuse it.
 // Only cholmod_factor.cpp includes CHOLMOD.
+#include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "chladni/precompute/fem.hpp"
 
@@ -25,9 +27,13 @@ class CholmodFactor {
   /// Orders and analyzes the pattern of A (symmetric, both triangles stored; the upper one is
   /// kept, in long indices). With
   /// `block` > 1, A is made of dense block x block blocks (3: a node's displacements), and the
-  /// ordering is found on the graph of the blocks, a ninth of the entries, then expanded. Throws
-  /// InputError when CHOLMOD runs out of memory or the problem exceeds its index range.
-  FactorEstimate analyze(const SparseMatrix& A, int block = 1);
+  /// ordering is found on the graph of the blocks, a ninth of the entries, then expanded; or,
+  /// where `block_order` holds one, taken from it (an analysis of that graph has found it).
+  /// Throws InputError when CHOLMOD runs out of memory or the problem exceeds its index range.
+  FactorEstimate analyze(const SparseMatrix& A, int block = 1,
+                         const std::vector<std::int64_t>* block_order = nullptr);
+  /// The fill-reducing ordering the last analysis chose (row k of L is row order[k] of A).
+  std::vector<std::int64_t> ordering() const;
   /// Numeric factorization of A + beta B: A must have the analyzed pattern, B's must lie within
   /// it (K - sigma M is factorized without a copy of it). False when the sum is not positive
   /// definite; throws InputError on any other CHOLMOD failure.

@@ -258,7 +258,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
     throw InputError("asked for " + std::to_string(o.modes) + " modes but the mesh has only " +
                      std::to_string(n) + " degrees of freedom (or the cap " +
                      std::to_string(o.mode_cap) + " is lower)");
-  const FactorEstimate est = op.analyze();
+  const FactorEstimate est = op.analyze(o.node_ordering);
   r.factor_entries = est.entries, r.factor_bytes = est.bytes, r.factor_flops = est.flops;
   const double entries = double(K.nonZeros());
   r.matrix_bytes = kFactorizingBytesPerEntry * entries;
@@ -468,7 +468,8 @@ namespace {
 // CHOLMOD's analysis of the node graph, where each element couples all its nodes. K's pattern is
 // this graph with each entry a 3 x 3 block, so its factor has 9 times the entries and 27 times
 // the flops. `entries` receives the entries of K.
-FactorEstimate node_graph_estimate(const FemMesh& mesh, double& entries) {
+FactorEstimate node_graph_estimate(const FemMesh& mesh, double& entries,
+                                   std::vector<std::int64_t>* ordering = nullptr) {
   const int npe = mesh.nodes_per_element();
   std::vector<Eigen::Triplet<double, int>> t;
   t.reserve(mesh.element_count() * std::size_t(npe * npe));
@@ -483,7 +484,8 @@ FactorEstimate node_graph_estimate(const FemMesh& mesh, double& entries) {
   G.makeCompressed();
   t = {};
   Factor f;
-  FactorEstimate est = f.analyze(G, 1);
+  FactorEstimate est = f.analyze(G, 1, nullptr);
+  if (ordering) *ordering = f.ordering();
   est.entries *= 9, est.bytes *= 9, est.flops *= 27;
   entries = 9.0 * double(G.nonZeros());
   return est;
@@ -491,10 +493,11 @@ FactorEstimate node_graph_estimate(const FemMesh& mesh, double& entries) {
 
 }  // namespace
 
-double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o) {
+double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o,
+                          std::vector<std::int64_t>* node_ordering) {
   if (o.max_memory <= 0) return 0;
   double entries = 0;
-  const FactorEstimate est = node_graph_estimate(mesh, entries);
+  const FactorEstimate est = node_graph_estimate(mesh, entries, node_ordering);
   if (est.bytes <= 0) return 0;  // this build's factorization cannot say before factorizing
   return check_budget(Eigen::Index(mesh.dofs()), est, entries, o,
                       "; estimated from the mesh before assembly");

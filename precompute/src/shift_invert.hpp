@@ -24,7 +24,11 @@ constexpr const char* kFactorName = "CHOLMOD supernodal LLT";
 // CHOLMOD's supernodal LLT with every call checked (cholmod_factor.cpp).
 class Factor {
  public:
-  FactorEstimate analyze(const SparseMatrix& A, int block) { return chol_.analyze(A, block); }
+  FactorEstimate analyze(const SparseMatrix& A, int block,
+                         const std::vector<std::int64_t>* block_order) {
+    return chol_.analyze(A, block, block_order);
+  }
+  std::vector<std::int64_t> ordering() const { return chol_.ordering(); }
   // A + beta B, B's pattern within A's
   bool factor(const SparseMatrix& A, double beta, const SparseMatrix& B) {
     return chol_.factorize(A, beta, &B);
@@ -48,7 +52,9 @@ constexpr const char* kFactorName = "Eigen SimplicialLDLT";
 // P A P^T = L D L^T; the split factor is L D^1/2.
 class Factor {
  public:
-  FactorEstimate analyze(const SparseMatrix&, int) { return {}; }  // unknown before factorizing
+  // unknown before factorizing
+  FactorEstimate analyze(const SparseMatrix&, int, const std::vector<std::int64_t>*) { return {}; }
+  std::vector<std::int64_t> ordering() const { return {}; }
   bool factor(const SparseMatrix& A, double beta, const SparseMatrix& B) {
     ldlt_.compute(SparseMatrix(A + beta * B));
     if (ldlt_.info() != Eigen::Success || (ldlt_.vectorD().array() <= 0).any()) return false;
@@ -82,8 +88,10 @@ class SplitShiftInvert {
   Eigen::Index cols() const { return K_.cols(); }
   // The pattern of K - sigma M is K's (assemble() gives M the same one; the factorization checks
   // that M's lies within it) for every sigma: analyzed once, ordered by nodes (three interleaved
-  // displacements each, as assemble() numbers them).
-  FactorEstimate analyze() { return factor_.analyze(K_, 3); }
+  // displacements each, as assemble() numbers them), in `nodes`' order where it holds one.
+  FactorEstimate analyze(const std::vector<std::int64_t>& nodes) {
+    return factor_.analyze(K_, 3, &nodes);
+  }
   void factor(double sigma) {
     if (!factor_.factor(K_, -sigma, M_))
       throw InputError("the sparse factorization of K - sigma M (" + std::to_string(K_.rows()) +

@@ -20,11 +20,14 @@ FemPass fem_pass(TetMesh tets, const PrecomputeOptions& o, const EigenOptions& e
   f.tets = std::move(tets);
   f.nodes = fem.nodes.size();
   f.dofs = fem.dofs();
-  check_eigen_memory(fem, eo);  // refuse before assembly, the largest cost before the factor
+  // Refused before assembly, the largest cost before the factor; the ordering the check found is
+  // the factorization's.
+  EigenOptions e = eo;
+  check_eigen_memory(fem, eo, &e.node_ordering);
   FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
   f.nonzeros = std::size_t(km.K.nonZeros());
   sw.start("eigen-solve");
-  f.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), eo, p.note);
+  f.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), e, p.note);
   sw.start("error estimate");
   f.errors = estimate_mode_errors(fem, o.material, f.eigen, o.threads);
   return f;

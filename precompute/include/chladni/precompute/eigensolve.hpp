@@ -2,8 +2,10 @@
 // The generalized symmetric eigenproblem K v = lambda M v by shift-invert Lanczos (Spectra) over a
 // sparse Cholesky factorization of K - sigma M (CHOLMOD when built with it, else Eigen's
 // SimplicialLDLT). Only eigensolve.cpp includes Spectra and CHOLMOD.
+#include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "chladni/precompute/fem.hpp"
 #include "chladni/precompute/memory_budget.hpp"
@@ -30,6 +32,9 @@ struct EigenOptions {
   /// when the basis the budget leaves fills before the modes converge, solve_modes refuses
   /// (BudgetError) with the numbers.
   double max_memory = 0;
+  /// A fill-reducing ordering of the mesh's nodes (check_eigen_memory's), reused by the
+  /// factorization so the graph is ordered once; empty: the factorization finds one.
+  std::vector<std::int64_t> node_ordering;
 };
 
 struct EigenResult {
@@ -62,8 +67,10 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
 
 /// Before assembly: the memory solve_modes will need for `mesh`'s K and M (CHOLMOD's analysis
 /// of the node graph, scaled to three DOFs per node), in bytes. Throws BudgetError with the
-/// numbers when it exceeds options.max_memory; 0 without a budget or without CHOLMOD.
-double check_eigen_memory(const FemMesh& mesh, const EigenOptions& options);
+/// numbers when it exceeds options.max_memory; 0 without a budget or without CHOLMOD. The
+/// ordering the analysis found goes to `node_ordering`, for EigenOptions::node_ordering.
+double check_eigen_memory(const FemMesh& mesh, const EigenOptions& options,
+                          std::vector<std::int64_t>* node_ordering = nullptr);
 /// Before meshing: a lower bound on the memory solve_modes will need for a mesh of at least
 /// `tetrahedra` elements of the same solid, extrapolated from two coarser meshes of it (`coarse`
 /// smaller than `sample`). Throws BudgetError ("at least ...") when even that exceeds
