@@ -12,16 +12,13 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
+#include "edge_key.hpp"
 
 namespace chladni::precompute {
 namespace {
 
 using Tet = std::array<uint32_t, 4>;
 constexpr int kEdges[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
-
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
-}
 
 struct Bisector {
   std::vector<Vec3> nodes;

@@ -9,14 +9,12 @@
 #include <utility>
 #include <vector>
 
+#include "edge_key.hpp"
+
 namespace chladni::precompute {
 namespace {
 
 using Tri = std::array<uint32_t, 3>;
-
-uint64_t edge_key(uint32_t a, uint32_t b) {
-  return a < b ? (uint64_t(a) << 32) | b : (uint64_t(b) << 32) | a;
-}
 
 struct Sides {
   std::array<uint32_t, 2> tri{};
