@@ -7,17 +7,15 @@
 #include <Eigen/QR>
 #include <Eigen/SparseCholesky>
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <numbers>
 #include <random>
 
 #include "chladni/core/error.hpp"
+#include "eigen_memory.hpp"
 #include "eigensolve_dense.hpp"
 #include "huge_pages.hpp"
 #include "shift_invert.hpp"
@@ -110,6 +108,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
   orthonormalize(W, 0, R);
   V.leftCols(b) = W;
   Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> es;
+  Eigen::Index next_check = b, reported = 0;
   for (Eigen::Index k = b;; k += b) {  // V[:, 0:k] holds the basis
     const Eigen::Index j0 = k - b;
     op.apply_block(V.middleCols(j0, b), W);
@@ -119,41 +118,51 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
     // The three-term recurrence: W = C V_j - V_j A_j - V_{j-1} B_{j-1}^T.
     W.noalias() -= V.middleCols(j0, b) * T.block(j0, j0, b, b);
     if (j0 >= b) W.noalias() -= V.middleCols(j0 - b, b) * T.block(j0 - b, j0, b, b);
-    // Ritz pairs of the current projection; residual of pair i is ||B_next S(last block, i)||,
-    // with B_next from the next orthonormalization.
     const bool full = k + b > max_dim;
     orthonormalize(W, k, R);
-    es.compute(T.topLeftCorner(k, k));
-    const Eigen::VectorXd theta = es.eigenvalues().reverse();
-    const Eigen::MatrixXd S = es.eigenvectors().rowwise().reverse();
-    const Eigen::VectorXd res = (R * S.bottomRows(b)).colwise().norm();
-    Eigen::Index wanted = 0, done = 0;
-    for (Eigen::Index i = 0; i < k; ++i) {
-      const bool in = want > 0 ? i < want : theta(i) >= theta_min && i < cap;
-      if (!in) break;
-      ++wanted;
-      done += res(i) <= tol * theta(i);
-    }
-    // By threshold: also require the first Ritz value below it to be converged, so that no
-    // unconverged one can still rise above it (at the cap, the `cap` largest are wanted, as by
-    // count); and a basis well past the wanted count, so that a multiplet wider than the block
-    // has had room to appear.
-    const bool bracketed =
-        (want > 0 || wanted == cap || (wanted < k && res(wanted) <= tol * theta(wanted))) &&
-        k >= wanted + 2 * b;
-    if (status && (k / b) % 8 == 0)
-      status("block Lanczos: " + std::to_string(k) + " vectors, " + std::to_string(done) + " of " +
-             std::to_string(wanted) + " wanted modes converged");
-    if ((wanted > 0 && done == wanted && bracketed && (want == 0 || wanted == want)) || full) {
-      out.converged = done == wanted && bracketed;
-      out.done = done;
-      out.capped = want == 0 && wanted == cap && wanted < k && theta(wanted) >= theta_min;
-      out.theta = theta.head(wanted);
-      if (!out.converged) return out;  // refused by the caller: no Ritz vectors needed
-      out.Y.resize(n, wanted);
-      advise_huge_pages(out.Y);
-      out.Y.noalias() = V.leftCols(k) * S.leftCols(wanted);
-      return out;
+    // Ritz pairs of the current projection; residual of pair i is ||B_next S(last block, i)||,
+    // with B_next from the orthonormalization above. The dense eigen-decomposition of T costs
+    // O(k^3) against O(n k b) for a block's solves and reorthogonalization: done after every
+    // block it dominates a band search of thousands of vectors. Done once the basis has grown
+    // by an eighth, convergence is seen at most an eighth late and the decompositions add up to
+    // about 3.4 times the last one. Also before the basis grows (its storage doubles): it may
+    // already hold the modes.
+    if (full || k >= next_check || k + b > V.cols()) {
+      next_check = k + std::max<Eigen::Index>(b, k / 8 / b * b);
+      es.compute(T.topLeftCorner(k, k));
+      const Eigen::VectorXd theta = es.eigenvalues().reverse();
+      const Eigen::MatrixXd S = es.eigenvectors().rowwise().reverse();
+      const Eigen::VectorXd res = (R * S.bottomRows(b)).colwise().norm();
+      Eigen::Index wanted = 0, done = 0;
+      for (Eigen::Index i = 0; i < k; ++i) {
+        const bool in = want > 0 ? i < want : theta(i) >= theta_min && i < cap;
+        if (!in) break;
+        ++wanted;
+        done += res(i) <= tol * theta(i);
+      }
+      // By threshold: also require the first Ritz value below it to be converged, so that no
+      // unconverged one can still rise above it (at the cap, the `cap` largest are wanted, as by
+      // count); and a basis well past the wanted count, so that a multiplet wider than the block
+      // has had room to appear.
+      const bool bracketed =
+          (want > 0 || wanted == cap || (wanted < k && res(wanted) <= tol * theta(wanted))) &&
+          k >= wanted + 2 * b;
+      if (status && k >= reported + 8 * b) {
+        reported = k;
+        status("block Lanczos: " + std::to_string(k) + " vectors, " + std::to_string(done) +
+               " of " + std::to_string(wanted) + " wanted modes converged");
+      }
+      if ((wanted > 0 && done == wanted && bracketed && (want == 0 || wanted == want)) || full) {
+        out.converged = done == wanted && bracketed;
+        out.done = done;
+        out.capped = want == 0 && wanted == cap && wanted < k && theta(wanted) >= theta_min;
+        out.theta = theta.head(wanted);
+        if (!out.converged) return out;  // refused by the caller: no Ritz vectors needed
+        out.Y.resize(n, wanted);
+        advise_huge_pages(out.Y);
+        out.Y.noalias() = V.leftCols(k) * S.leftCols(wanted);
+        return out;
+      }
     }
     if (k + b > V.cols()) {
       const Eigen::Index cols = std::min<Eigen::Index>(max_dim, 2 * V.cols());
@@ -165,79 +174,6 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
     T.block(k, j0, b, b) = R;
     T.block(j0, k, b, b) = R.transpose();
   }
-}
-
-std::string gigabytes(double bytes) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.2f GB", bytes / 1e9);
-  return buf;
-}
-
-// The eigen-solve's memory has two peaks besides the factor. Factorizing: K (a double and an int
-// per entry), M (the same for a third of the entries), the upper triangle of K - sigma M in long
-// indices (a double and a long for half the entries) and CHOLMOD's permuted copy of it (the
-// same): 32 bytes per entry of K. Iterating: K, M and the kept pattern (20 bytes per entry), the
-// Lanczos basis and the Ritz vectors (the modes).
-constexpr double kFactorizingBytesPerEntry = 12 + 4 + 8 + 8;
-constexpr double kIteratingBytesPerEntry = 12 + 4 + 4;
-
-// The modes the Lanczos run must hold, the six rigid ones included: those asked for, or those
-// expected below max_frequency within the cap; 0 where unknown (a band of unknown size).
-Eigen::Index ritz_columns(Eigen::Index n, const EigenOptions& o) {
-  const std::size_t modes = o.modes > 0 ? o.modes : std::min(o.expected_modes, o.mode_cap);
-  return modes == 0 ? 0 : std::min<Eigen::Index>(n, Eigen::Index(modes) + 6);
-}
-
-// The smallest basis worth factorizing for: modes converge in about 3.3 vectors per mode (352
-// for spot.obj's 106), so 4 per mode and two blocks.
-Eigen::Index lanczos_floor(Eigen::Index n, const EigenOptions& o) {
-  const Eigen::Index ritz = ritz_columns(n, o);
-  return std::min<Eigen::Index>(n, ritz > 0 ? 4 * ritz + 2 * o.block : 4 * o.block);
-}
-
-// The largest basis: twice the floor for the cap's modes (clusters of close modes, a cube's or
-// a box's, can take 6 vectors per mode where they are few), where the budget leaves room for it
-// after the factor, the matrices and the Ritz vectors (`reserved`), but never below the floor
-// (the budget check refuses that case). `by_memory` says whether the budget, not the count, set
-// it. The basis grows only as the iteration needs it.
-Eigen::Index lanczos_dim(Eigen::Index n, double reserved, const EigenOptions& o,
-                         bool* by_memory = nullptr) {
-  const Eigen::Index max_nev = std::min<Eigen::Index>(n - 2, Eigen::Index(o.mode_cap) + 6);
-  const Eigen::Index target = std::min<Eigen::Index>(n, 8 * max_nev + 4 * o.block);
-  Eigen::Index dim = target;
-  if (o.max_memory > 0)
-    dim = std::min<Eigen::Index>(
-        dim, Eigen::Index(std::max(0.0, o.max_memory - reserved) / (8.0 * double(n))));
-  if (by_memory) *by_memory = dim < target;
-  return std::max(dim, lanczos_floor(n, o));
-}
-
-// What the eigen-solve needs at most: the factor with whichever phase is larger. Refuses
-// (BudgetError) above the budget, with the parts.
-double check_budget(Eigen::Index n, const FactorEstimate& est, double entries,
-                    const EigenOptions& o, const std::string& how, const char* amount = "about ") {
-  const double factorizing = kFactorizingBytesPerEntry * entries;
-  const double basis = 8.0 * double(n) * double(lanczos_floor(n, o) + ritz_columns(n, o));
-  const double iterating = kIteratingBytesPerEntry * entries + basis;
-  const double need = est.bytes + std::max(factorizing, iterating);
-  if (o.max_memory <= 0 || need <= o.max_memory) return need;
-  throw BudgetError(
-      "the eigen-solve would need " + std::string(amount) + gigabytes(need) +
-      " (the sparse factor of K - sigma M for " + std::to_string(n) +
-      " DOFs: " + gigabytes(est.bytes) + ", nnz(L) " + std::to_string(std::llround(est.entries)) +
-      ", " + std::to_string(std::llround(est.flops / 1e9)) +
-      " GFLOP; the matrices and their copies while it is computed: " + gigabytes(factorizing) +
-      "; afterwards the matrices, the Lanczos basis and the modes: " + gigabytes(iterating) + how +
-      "), more than the memory budget of " + gigabytes(o.max_memory) +
-      ": raise --max-tet-volume (coarser elements), lower --max-freq or "
-      "--max-modes, or raise --max-memory");
-}
-
-// The bytes the iteration may count on before the basis: the factor, the matrices and the
-// Ritz vectors.
-double iteration_reserve(Eigen::Index n, const FactorEstimate& est, double entries,
-                         const EigenOptions& o) {
-  return est.bytes + kIteratingBytesPerEntry * entries + 8.0 * double(n) * ritz_columns(n, o);
 }
 
 // Shift-invert Lanczos over the sparse factor: the lowest eigenpairs of K v = lambda M v, as
@@ -355,17 +291,6 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
 
 }  // namespace
 
-double default_memory_budget() {
-  // MemAvailable counts what can be had without swapping (free plus reclaimable caches).
-  std::ifstream in("/proc/meminfo");
-  for (std::string line; std::getline(in, line);) {
-    double kb = 0;
-    if (std::sscanf(line.c_str(), "MemAvailable: %lf kB", &kb) == 1) return 0.8 * kb * 1024.0;
-  }
-  const long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGE_SIZE);
-  return pages > 0 && size > 0 ? 0.8 * double(pages) * double(size) : 0.0;
-}
-
 std::string factorization_name() {
   return kFactorName;
 }
@@ -461,81 +386,6 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
     r.residual.push_back((Kv.col(c) - r.lambda[i] * Mk.col(c)).norm() / Kv.col(c).norm());
   }
   return r;
-}
-
-namespace {
-
-// CHOLMOD's analysis of the node graph, where each element couples all its nodes. K's pattern is
-// this graph with each entry a 3 x 3 block, so its factor has 9 times the entries and 27 times
-// the flops. `entries` receives the entries of K.
-FactorEstimate node_graph_estimate(const FemMesh& mesh, double& entries,
-                                   std::vector<std::int64_t>* ordering = nullptr) {
-  const int npe = mesh.nodes_per_element();
-  std::vector<Eigen::Triplet<double, int>> t;
-  t.reserve(mesh.element_count() * std::size_t(npe * npe));
-  advise_huge_pages(t.data(), sizeof(t[0]) * t.capacity());
-  for (std::size_t e = 0; e < mesh.element_count(); ++e)
-    for (int a = 0; a < npe; ++a)
-      for (int b = 0; b < npe; ++b)
-        t.emplace_back(int(mesh.elements[e * npe + a]), int(mesh.elements[e * npe + b]),
-                       a == b ? 1.0 : 0.0);
-  SparseMatrix G(Eigen::Index(mesh.nodes.size()), Eigen::Index(mesh.nodes.size()));
-  G.setFromTriplets(t.begin(), t.end());
-  G.makeCompressed();
-  t = {};
-  Factor f;
-  FactorEstimate est = f.analyze(G, 1, nullptr);
-  if (ordering) *ordering = f.ordering();
-  est.entries *= 9, est.bytes *= 9, est.flops *= 27;
-  entries = 9.0 * double(G.nonZeros());
-  return est;
-}
-
-}  // namespace
-
-double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o,
-                          std::vector<std::int64_t>* node_ordering) {
-  if (o.max_memory <= 0) return 0;
-  double entries = 0;
-  const FactorEstimate est = node_graph_estimate(mesh, entries, node_ordering);
-  if (est.bytes <= 0) return 0;  // this build's factorization cannot say before factorizing
-  return check_budget(Eigen::Index(mesh.dofs()), est, entries, o,
-                      "; estimated from the mesh before assembly");
-}
-
-double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& sample,
-                                         double tetrahedra, const EigenOptions& o) {
-  if (o.max_memory <= 0) return 0;
-  // DOFs per tetrahedron, at most what a large quality mesh has (P2: 1.32 nodes per tetrahedron
-  // from Euler's formula with about 6.3 tetrahedra per vertex, so 3.95 DOFs; P1: 0.48) and never
-  // above the sample's own, where the surface's share is larger.
-  const double ns = double(sample.dofs());
-  const bool p2 = sample.nodes_per_element() == 10;
-  const double n =
-      std::max(ns, std::min(p2 ? 3.6 : 0.4, ns / double(sample.element_count())) * tetrahedra);
-  double entries = 0;
-  FactorEstimate est = node_graph_estimate(sample, entries);
-  if (est.bytes <= 0) return 0;
-  // Nested dissection's factor grows as n^(4/3) in a solid and n log n in a shell, and a thin
-  // part grows faster once its thickness is resolved: the growth between the two meshes,
-  // within [1, 4/3] (flops [1, 2]), extrapolated from the finer one can only underestimate.
-  // Where the two are alike (a surface that decides the mesh), only the floors are known.
-  const double r = std::log(n / ns), rs = std::log(ns / double(coarse.dofs()));
-  double a = 1, af = 1;
-  if (rs > 0.05) {
-    double unused = 0;
-    const FactorEstimate low = node_graph_estimate(coarse, unused);
-    a = std::clamp(std::log(est.entries / low.entries) / rs, 1.0, 4.0 / 3.0);
-    af = std::clamp(std::log(est.flops / low.flops) / rs, 1.0, 2.0);
-  }
-  est.entries *= std::exp(a * r), est.bytes *= std::exp(a * r), est.flops *= std::exp(af * r);
-  entries *= n / ns;
-  return check_budget(Eigen::Index(n), est, entries, o,
-                      "; a lower bound found before meshing, from meshes of " +
-                          std::to_string(coarse.element_count()) + " and " +
-                          std::to_string(sample.element_count()) + " tetrahedra extrapolated to " +
-                          std::to_string(std::llround(tetrahedra)),
-                      "at least ");
 }
 
 }  // namespace chladni::precompute

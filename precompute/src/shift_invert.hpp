@@ -1,6 +1,6 @@
 #pragma once
 // The shift-invert operator of the eigen-solve over a sparse Cholesky factor (CHOLMOD when built
-// with it, else Eigen's SimplicialLDLT). Included by eigensolve.cpp only.
+// with it, else Eigen's SimplicialLDLT). Included by eigensolve.cpp and eigen_memory.cpp.
 #include <Eigen/SparseCholesky>
 #include <chrono>
 #include <string>
