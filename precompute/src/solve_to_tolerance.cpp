@@ -5,6 +5,7 @@
 #include <numeric>
 #include <optional>
 
+#include "band_modes.hpp"
 #include "chladni/core/error.hpp"
 #include "timing.hpp"
 
@@ -143,30 +144,6 @@ std::string percent(double x) {
   return buf;
 }
 
-// How many modes lie below max_frequency, from the volume V and surface area S alone: Weyl's law
-// for an elastic solid, N = V omega^3 / (6 pi^2) (1/c_p^3 + 2/c_s^3), or for a thin body the
-// bending modes of a plate of area S/2 and thickness t = 2V/S, N = (S/2) k^2 / (4 pi) with
-// k^2 = omega / t sqrt(12 rho (1 - nu^2) / E) (Kirchhoff), whichever is more.
-double band_modes(const SurfaceMesh& surface, double volume, const PrecomputeOptions& o) {
-  const Material& m = o.material;
-  const double w = 2 * std::numbers::pi * o.max_frequency;
-  const double cs = m.shear_speed();
-  const double cp = cs * std::sqrt((m.lame_lambda() + 2 * m.lame_mu()) / m.lame_mu());
-  const double solid = volume * w * w * w / (6 * std::numbers::pi * std::numbers::pi) *
-                       (1 / (cp * cp * cp) + 2 / (cs * cs * cs));
-  double area = 0;
-  for (const auto& t : surface.triangles) {
-    const Vec3 n = cross(sub(surface.vertices[t[1]], surface.vertices[t[0]]),
-                         sub(surface.vertices[t[2]], surface.vertices[t[0]]));
-    area += 0.5 * std::sqrt(dot(n, n));
-  }
-  const double thickness = 2 * volume / area;
-  const double k2 =
-      w / thickness *
-      std::sqrt(12 * m.density * (1 - m.poisson_ratio * m.poisson_ratio) / m.youngs_modulus);
-  return std::max(solid, 0.5 * area * k2 / (4 * std::numbers::pi));
-}
-
 // A refusal of the whole band says how many modes it holds (`band`, from band_modes), so the
 // user can ask for fewer.
 [[noreturn]] void refuse_band(const BudgetError& e, std::size_t band, const PrecomputeOptions& o) {
@@ -183,7 +160,8 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
                            PrecomputeReport& r, SurfaceMesh& first) {
   EigenOptions eo = eigen;
   if (o.max_modes == 0)
-    eo.expected_modes = std::size_t(std::llround(band_modes(surface, std::abs(r.mesh.volume), o)));
+    eo.expected_modes = std::size_t(
+        std::llround(band_modes(surface, std::abs(r.mesh.volume), o.material, o.max_frequency)));
   const bool chosen = o.max_tet_volume > 0;
   double volume = o.max_tet_volume;
   if (!chosen)
@@ -249,6 +227,12 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
     if (p.note)
       p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
              " tetrahedra, largest estimated frequency error " + percent(worst));
+    // A band search on the next mesh holds what this one found, not the estimate made before
+    // meshing: a finer mesh's frequencies are lower by about the error, so its count is higher
+    // by the cube of that (Weyl). Its memory check then counts the basis the search will fill.
+    if (o.max_modes == 0)
+      eo.expected_modes =
+          std::size_t(std::ceil(double(f.eigen.lambda.size()) * std::pow(1 + worst, 3))) + 1;
     best = std::move(f);
     r.max_tet_volume = meshed;
     step = 1;

@@ -1,6 +1,6 @@
 #pragma once
 // A closed triangle surface as read from a file, its checks and its repair (CGAL Polygon Mesh
-// Processing). Only mesh_check.cpp includes CGAL.
+// Processing). Only mesh_check.cpp and local_thickness.cpp include CGAL.
 #include <array>
 #include <cstdint>
 #include <string>

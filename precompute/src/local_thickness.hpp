@@ -1,0 +1,16 @@
+#pragma once
+// The solid's thickness under each surface triangle, for estimating how many modes a thin part
+// holds before any mesh is made. Only local_thickness.cpp and mesh_check.cpp include CGAL.
+#include <vector>
+
+#include "chladni/precompute/surface_mesh.hpp"
+
+namespace chladni::precompute {
+
+/// Per triangle: the shape diameter function (Shapira, Shamir & Cohen-Or 2008, CGAL's
+/// sdf_values), the robust mean length of rays cast inward in a narrow cone about the inward
+/// normal: a wall's thickness, a solid's chord. 0 where no ray came back; all 0 when the surface
+/// is not a closed polygon mesh.
+std::vector<double> local_thickness(const SurfaceMesh& surface);
+
+}  // namespace chladni::precompute
