@@ -1,6 +1,7 @@
 #pragma once
-// Progress on stderr for long commands: a redrawn bar on a terminal, plain lines (each stage and
-// note) otherwise; warnings are printed even when quiet.
+// Progress on stderr for long commands: a redrawn bar with the time left on a terminal, plain
+// lines (each stage, each tenth of a stage that reports its fraction, each note) otherwise;
+// warnings are printed even when quiet.
 #include <chrono>
 #include <string>
 
@@ -22,6 +23,7 @@ class ProgressBar {
   bool enabled_, plain_;
   std::string stage_;
   int index_ = 0;
+  int tenths_ = 0;  ///< of the current stage, printed as plain lines
   std::chrono::steady_clock::time_point t0_, last_draw_;
   bool open_line_ = false;
 };

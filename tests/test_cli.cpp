@@ -113,6 +113,9 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
                  " --max-modes 6 --max-tet-volume 1e-6 --json " + summary);
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("6 rigid modes removed"), std::string::npos) << r.output;
+  // Not a terminal: long stages say how far they are, as plain lines, with the time left.
+  EXPECT_NE(r.output.find("  transfer: 50 % ("), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" s left)\n"), std::string::npos) << r.output;
   nlohmann::json j = nlohmann::json::parse(std::ifstream(summary));
   EXPECT_EQ(j["modes"]["kept"], 6);
   EXPECT_EQ(j["eigen"]["rigid_removed"], 6);
