@@ -124,11 +124,11 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
     // with B_next from the orthonormalization above. The dense eigen-decomposition of T costs
     // O(k^3) against O(n k b) for a block's solves and reorthogonalization: done after every
     // block it dominates a band search of thousands of vectors. Done once the basis has grown
-    // by an eighth, convergence is seen at most an eighth late and the decompositions add up to
-    // about 3.4 times the last one. Also before the basis grows (its storage doubles): it may
+    // by a sixteenth, convergence is seen at most a sixteenth late and the decompositions add up
+    // to about 6 times the last one. Also before the basis grows (its storage doubles): it may
     // already hold the modes.
     if (full || k >= next_check || k + b > V.cols()) {
-      next_check = k + std::max<Eigen::Index>(b, k / 8 / b * b);
+      next_check = k + std::max<Eigen::Index>(b, k / 16 / b * b);
       es.compute(T.topLeftCorner(k, k));
       const Eigen::VectorXd theta = es.eigenvalues().reverse();
       const Eigen::MatrixXd S = es.eigenvectors().rowwise().reverse();
