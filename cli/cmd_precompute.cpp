@@ -87,6 +87,7 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                       {"dofs", m.dofs},
                       {"worst_error", m.worst_error},
                       {"max_tet_volume", m.max_tet_volume},
+                      {"expected_modes", m.expected_modes},
                       {"seconds", m.seconds}});
   j["accuracy"] = {{"tolerance", a.tolerance},       {"max_meshes", a.max_meshes},
                    {"refinement", a.refinement},     {"converged", r.converged},

@@ -223,7 +223,8 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
       refuse_band(*budget, eo.expected_modes, o);
     }
     worst = worst_error(f, o);
-    r.passes.push_back({f.tets.tets.size(), f.dofs, worst, seconds_since(t0), meshed});
+    r.passes.push_back(
+        {f.tets.tets.size(), f.dofs, worst, seconds_since(t0), meshed, eo.expected_modes});
     if (p.note)
       p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
              " tetrahedra, largest estimated frequency error " + percent(worst));

@@ -69,6 +69,10 @@ struct PrecomputeReport {
     double worst_error = 0;
     double seconds = 0;
     double max_tet_volume = 0;  ///< its bound (refined locally: its finest region's)
+    /// With all modes below max_frequency: the modes its memory check sized the Lanczos basis
+    /// for (the first mesh: the estimate made before meshing; a refined one: what the previous
+    /// mesh found, raised by its error). 0 when the modes were asked for by count.
+    std::size_t expected_modes = 0;
   };
   std::vector<MeshPass> passes;
   bool converged = true;           ///< every mode asked for is within PrecomputeOptions::tolerance
