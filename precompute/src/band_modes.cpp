@@ -1,6 +1,5 @@
 #include "band_modes.hpp"
 
-#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -18,8 +17,9 @@ namespace chladni::precompute {
 // Petersson, Structure-Borne Sound, ch. 7). Solved counts at 20 kHz in steel against this
 // estimate: bowl 72 (73), bell 90 (88), the rotor's ring 833 (793), a sphere 27 (23); a beam's
 // (the bar: 21 against 9) is the one shape it undercounts by half.
-double band_modes(const SurfaceMesh& input, double volume, const Material& m,
+double band_modes(const SurfaceMesh& input, const MeshReport& checked, const Material& m,
                   double max_frequency) {
+  const double volume = std::abs(checked.volume);
   const double pi = std::numbers::pi;
   const double w = 2 * pi * max_frequency;
   const double cs = m.shear_speed();
@@ -28,19 +28,15 @@ double band_modes(const SurfaceMesh& input, double volume, const Material& m,
       volume * w * w * w / (6 * pi * pi) * (1 / (cp * cp * cp) + 2 / (cs * cs * cs));
   // Rays leave from each triangle's centroid: a CAD face as two triangles over a thick and a thin
   // part would count as one or the other. Split, each piece is at most a twentieth of the size.
-  if (input.vertices.empty()) return solid;
-  Vec3 lo = input.vertices[0], hi = lo;
-  for (const Vec3& v : input.vertices)
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], v[k]), hi[k] = std::max(hi[k], v[k]);
-  const Vec3 d = sub(hi, lo);
-  const SurfaceMesh surface = split_long_edges(input, std::sqrt(dot(d, d)) / 20);
+  const double diagonal = norm(sub(checked.bbox_max, checked.bbox_min));
+  if (!(diagonal > 0) || !std::isfinite(diagonal)) return solid;
+  const SurfaceMesh surface = split_long_edges(input, diagonal / 20);
   std::vector<double> area(surface.triangles.size());
   double total = 0;
   for (std::size_t i = 0; i < area.size(); ++i) {
     const auto& t = surface.triangles[i];
-    const Vec3 n = cross(sub(surface.vertices[t[1]], surface.vertices[t[0]]),
-                         sub(surface.vertices[t[2]], surface.vertices[t[0]]));
-    area[i] = 0.5 * std::sqrt(dot(n, n));
+    const auto& v = surface.vertices;
+    area[i] = 0.5 * norm(triangle_normal(v[t[0]], v[t[1]], v[t[2]]));
     total += area[i];
   }
   if (!(total > 0)) return solid;

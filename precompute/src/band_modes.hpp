@@ -6,9 +6,10 @@
 
 namespace chladni::precompute {
 
-/// Modes (rigid ones excluded) of the solid bounded by `surface` (volume `volume`, m^3) in
-/// `material` below `max_frequency` Hz, from its volume, area and local thickness.
-double band_modes(const SurfaceMesh& surface, double volume, const Material& material,
+/// Modes (rigid ones excluded) of the solid bounded by `surface` in `material` below
+/// `max_frequency` Hz, from its volume, area and local thickness; `checked` is check_mesh's
+/// report on `surface` (its volume and bounding box).
+double band_modes(const SurfaceMesh& surface, const MeshReport& checked, const Material& material,
                   double max_frequency);
 
 }  // namespace chladni::precompute

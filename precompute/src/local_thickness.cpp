@@ -1,15 +1,14 @@
 #include "local_thickness.hpp"
 
-#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
-#include <CGAL/Surface_mesh.h>
 #include <CGAL/mesh_segmentation.h>
+
+#include "cgal_surface.hpp"
 
 namespace chladni::precompute {
 
 namespace {
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Mesh = CGAL::Surface_mesh<Kernel::Point_3>;
+using cgal_surface::Mesh;
 namespace PMP = CGAL::Polygon_mesh_processing;
 
 // A cone of 0.5 rad rather than CGAL's 2 pi / 3: a wall's rays then cross it at most 13 % longer
@@ -21,15 +20,10 @@ constexpr std::size_t kRays = 9;
 
 std::vector<double> local_thickness(const SurfaceMesh& surface) {
   std::vector<double> thickness(surface.triangles.size(), 0.0);
-  std::vector<Kernel::Point_3> points;
-  points.reserve(surface.vertices.size());
-  for (const Vec3& v : surface.vertices) points.emplace_back(v[0], v[1], v[2]);
-  std::vector<std::vector<std::size_t>> polygons;
-  polygons.reserve(surface.triangles.size());
-  for (const auto& t : surface.triangles) polygons.push_back({t[0], t[1], t[2]});
+  const auto polygons = cgal_surface::to_polygons(surface);
   if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) return thickness;
   Mesh mesh;
-  PMP::polygon_soup_to_polygon_mesh(points, polygons, mesh);
+  PMP::polygon_soup_to_polygon_mesh(cgal_surface::to_points(surface), polygons, mesh);
   if (mesh.number_of_faces() != surface.triangles.size() || !CGAL::is_closed(mesh))
     return thickness;
   auto sdf = mesh.add_property_map<Mesh::Face_index, double>("f:sdf", 0.0).first;

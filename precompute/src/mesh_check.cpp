@@ -1,4 +1,4 @@
-// Surface checks and repairs with CGAL Polygon Mesh Processing (the one CGAL unit).
+// Surface checks and repairs with CGAL Polygon Mesh Processing (one of the two CGAL units).
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <CGAL/Polygon_mesh_processing/border.h>
 #include <CGAL/Polygon_mesh_processing/connected_components.h>
@@ -20,15 +20,15 @@
 #include <numeric>
 #include <sstream>
 
+#include "cgal_surface.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 
 namespace chladni::precompute {
 namespace {
 
-using Kernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using Point = Kernel::Point_3;
-using Mesh = CGAL::Surface_mesh<Point>;
+using cgal_surface::Kernel, cgal_surface::Mesh, cgal_surface::Point;
+using cgal_surface::to_points, cgal_surface::to_polygons;
 namespace PMP = CGAL::Polygon_mesh_processing;
 constexpr std::size_t kExamples = 5;
 
@@ -41,20 +41,6 @@ struct UnionFind {
   }
   void unite(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
 };
-
-std::vector<Point> to_points(const SurfaceMesh& m) {
-  std::vector<Point> p;
-  p.reserve(m.vertices.size());
-  for (const Vec3& v : m.vertices) p.emplace_back(v[0], v[1], v[2]);
-  return p;
-}
-
-std::vector<std::vector<std::size_t>> to_polygons(const SurfaceMesh& m) {
-  std::vector<std::vector<std::size_t>> polys;
-  polys.reserve(m.triangles.size());
-  for (const auto& t : m.triangles) polys.push_back({t[0], t[1], t[2]});
-  return polys;
-}
 
 SurfaceMesh from_mesh(const Mesh& mesh) {
   std::vector<Point> points;

@@ -160,8 +160,8 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
                            PrecomputeReport& r, SurfaceMesh& first) {
   EigenOptions eo = eigen;
   if (o.max_modes == 0)
-    eo.expected_modes = std::size_t(
-        std::llround(band_modes(surface, std::abs(r.mesh.volume), o.material, o.max_frequency)));
+    eo.expected_modes =
+        std::size_t(std::llround(band_modes(surface, r.mesh, o.material, o.max_frequency)));
   const bool chosen = o.max_tet_volume > 0;
   double volume = o.max_tet_volume;
   if (!chosen)
