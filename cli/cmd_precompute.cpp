@@ -47,8 +47,10 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                    {"nu", bank.material.poisson_ratio},
                    {"rho", bank.material.density},
                    {"damping", bank.material.damping.to_string()}};
-  j["surface"] = {
-      {"vertices", r.mesh.vertices}, {"triangles", r.mesh.triangles}, {"volume_m3", r.mesh.volume}};
+  j["surface"] = {{"vertices", r.mesh.vertices},
+                  {"triangles", r.mesh.triangles},
+                  {"volume_m3", r.mesh.volume},
+                  {"cavities", r.mesh.cavities}};
   j["repairs"] = r.repairs;
   j["volume_mesh"] = {{"tetrahedra", r.tets},
                       {"nodes", r.nodes},
@@ -177,8 +179,11 @@ void run_precompute(const PrecomputeArgs& a) {
   if (!a.json_path.empty())
     write_file_atomic(a.json_path, summary_json(a, r, bank).dump(2) + "\n", "--json");
   if (a.quiet) return;
-  std::printf("mesh %s: %zu vertices, %zu triangles, volume %.4g m^3\n", a.mesh.c_str(),
+  std::printf("mesh %s: %zu vertices, %zu triangles, volume %.4g m^3", a.mesh.c_str(),
               r.mesh.vertices, r.mesh.triangles, r.mesh.volume);
+  if (r.mesh.cavities)  // hollow: the cavities' faces are meshed, not put in the soundbank
+    std::printf(", hollow (%zu %s)", r.mesh.cavities, r.mesh.cavities == 1 ? "cavity" : "cavities");
+  std::printf("\n");
   for (const auto& line : r.repairs) std::printf("  repaired: %s\n", line.c_str());
   std::printf("material %s: E %.4g Pa, nu %.3g, rho %.4g kg/m^3, damping %s\n",
               bank.material.name.c_str(), bank.material.youngs_modulus, bank.material.poisson_ratio,

@@ -94,7 +94,11 @@ void run_radiate(const RadiateArgs& a) {
     throw InputError("--via must be surface, sources or multipole");
   const precompute::SurfaceMesh mesh =
       precompute::read_mesh(a.mesh, precompute::unit_scale(a.unit) * a.scale);
-  precompute::require_valid(precompute::check_mesh(mesh), a.mesh, false);
+  const precompute::MeshReport checked = precompute::check_mesh(mesh);
+  precompute::require_valid(checked, a.mesh, false);
+  if (checked.cavities)  // the air touches the outer piece only
+    throw InputError(a.mesh + ": the surface has " + std::to_string(checked.cavities) +
+                     " inner pieces (cavities); radiate takes the outer surface alone");
 
   std::vector<cd> un;
   if (!a.pattern.empty()) {

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <vector>
 
 #include "chladni/core/soundbank.hpp"
@@ -107,6 +108,45 @@ inline SurfaceMesh l_section_surface(double block, double fin, double reach, dou
     const Vec3 out{P[j][1] - P[i][1], 0, P[i][0] - P[j][0]};
     add(i, j, j + 7, out);
     add(i, j + 7, i + 7, out);
+  }
+  return m;
+}
+
+/// `inner` appended to `outer`, its winding reversed when `reverse` (a cavity's faces point into
+/// it).
+inline SurfaceMesh with_piece(SurfaceMesh outer, const SurfaceMesh& inner, bool reverse) {
+  const uint32_t base = uint32_t(outer.vertices.size());
+  outer.vertices.insert(outer.vertices.end(), inner.vertices.begin(), inner.vertices.end());
+  for (auto t : inner.triangles) {
+    for (uint32_t& v : t) v += base;
+    if (reverse) std::swap(t[1], t[2]);
+    outer.triangles.push_back(t);
+  }
+  return outer;
+}
+
+/// A hollow ball: icospheres of radius r and r - wall, the inner one wound into the cavity.
+inline SurfaceMesh hollow_sphere(double r, double wall, int level) {
+  return with_piece(icosphere(r, level), icosphere(r - wall, level), true);
+}
+
+/// A disc of radius r and thickness h as an n-gon prism whose caps are fans from their centres
+/// (as CAD programs export one), outward triangles.
+inline SurfaceMesh disc_prism(double r, double h, int n) {
+  SurfaceMesh m;
+  m.vertices = {{0, 0, 0}, {0, 0, h}};
+  for (double z : {0.0, h})
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * std::numbers::pi * i / n;
+      m.vertices.push_back({r * std::cos(a), r * std::sin(a), z});
+    }
+  const uint32_t rim = 2, top = 2 + uint32_t(n);
+  for (uint32_t i = 0; i < uint32_t(n); ++i) {
+    const uint32_t j = (i + 1) % uint32_t(n);
+    m.triangles.push_back({0, rim + j, rim + i});
+    m.triangles.push_back({1, top + i, top + j});
+    m.triangles.push_back({rim + i, rim + j, top + j});
+    m.triangles.push_back({rim + i, top + j, top + i});
   }
   return m;
 }

@@ -14,6 +14,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
 #include "parallel.hpp"
+#include "surface_pieces.hpp"
 #include "timing.hpp"
 
 // Level 3 only: this file is built without EIGEN_USE_BLAS because Debian 12's OpenBLAS
@@ -56,30 +57,6 @@ std::vector<uint32_t> farthest_points(const std::vector<Vec3>& points, std::size
     }
   }
   return order;
-}
-
-// Distance along the ray o + t dir to the nearest triangle not incident to vertex `skip`
-// (Moller & Trumbore 1997); +inf when none.
-double ray_depth(const SurfaceMesh& m, const Vec3& o, const Vec3& dir, uint32_t skip, double eps) {
-  double best = std::numeric_limits<double>::infinity();
-  for (const auto& t : m.triangles) {
-    if (t[0] == skip || t[1] == skip || t[2] == skip) continue;
-    const Vec3& a = m.vertices[t[0]];
-    const Vec3 e1 = sub(m.vertices[t[1]], a), e2 = sub(m.vertices[t[2]], a);
-    const Vec3 p = cross(dir, e2);
-    const double det = dot(e1, p);
-    if (std::abs(det) < 1e-300) continue;
-    const double inv = 1.0 / det;
-    const Vec3 s = sub(o, a);
-    const double u = dot(s, p) * inv;
-    if (u < 0.0 || u > 1.0) continue;
-    const Vec3 q = cross(s, e1);
-    const double v = dot(dir, q) * inv;
-    if (v < 0.0 || u + v > 1.0) continue;
-    const double tt = dot(e2, q) * inv;
-    if (tt > eps && tt < best) best = tt;
-  }
-  return best;
 }
 
 Vec3 at_barycentric(const SurfaceMesh& m, uint32_t t, const std::array<double, 3>& b) {

@@ -23,6 +23,7 @@
 #include "cgal_surface.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
+#include "surface_pieces.hpp"
 
 namespace chladni::precompute {
 namespace {
@@ -66,6 +67,75 @@ std::string edges_text(const std::vector<std::pair<uint32_t, uint32_t>>& e) {
   return os.str();
 }
 
+// Pieces and, on a closed consistently wound surface, their nesting: a piece at odd depth is a
+// cavity when its volume is negative (faces into it), one at even depth > 0 lies loose in one.
+void classify_pieces(const SurfaceMesh& m, MeshReport& r) {
+  const SurfacePieces s = surface_pieces(m);
+  r.components = s.count();
+  if (!s.nested() || r.boundary_edges || r.non_manifold_edges || r.inconsistent_edges) return;
+  for (std::size_t p = 0; p < s.count(); ++p) {
+    if (s.depth[p] == 0) {
+      ++r.outer_pieces;
+    } else if (s.depth[p] % 2 == 0) {
+      ++r.loose_pieces;
+      note(r.loose_examples, s.first_triangle[p]);
+    } else if (s.volume[p] < 0) {
+      ++r.cavities;
+    } else {
+      ++r.outward_inner_pieces;
+      note(r.outward_inner_examples, s.first_triangle[p]);
+    }
+  }
+}
+
+// Keeps the piece of most triangles and the cavities directly inside it.
+template <class Say>
+void keep_largest_solid(SurfaceMesh& m, Say say) {
+  const SurfacePieces s = surface_pieces(m);
+  if (s.count() < 2) return;
+  std::size_t main = s.count();
+  for (std::size_t p = 0; p < s.count(); ++p)
+    if ((!s.nested() || s.depth[p] == 0) &&
+        (main == s.count() || s.triangles[p] > s.triangles[main]))
+      main = p;
+  std::vector<bool> keep(s.count(), false);
+  std::size_t dropped = 0, dropped_faces = 0, cavities = 0;
+  for (std::size_t p = 0; p < s.count(); ++p) {
+    keep[p] = p == main || (s.nested() && s.depth[p] == 1 && s.parent[p] == int(main));
+    cavities += keep[p] && p != main;
+    if (!keep[p]) ++dropped, dropped_faces += s.triangles[p];
+  }
+  if (!dropped) return;
+  m = keep_pieces(m, s, keep);
+  say("removed " + std::to_string(dropped) + " separate pieces (" + std::to_string(dropped_faces) +
+      " triangles), keeping the largest" +
+      (cavities == 1 ? " and the cavity inside it"
+       : cavities    ? " and the " + std::to_string(cavities) + " cavities inside it"
+                     : ""));
+}
+
+// Winds each piece of a closed surface to bound the solid: outer pieces outward, cavities (odd
+// nesting depth) into themselves.
+template <class Say>
+void orient_pieces(SurfaceMesh& m, Say say) {
+  const SurfacePieces s = surface_pieces(m);
+  if (s.count() > 1 && !s.nested()) return;
+  std::vector<bool> flip(s.count(), false);
+  std::size_t outer = 0, inner = 0;
+  for (std::size_t p = 0; p < s.count(); ++p) {
+    const bool odd = s.count() > 1 && s.depth[p] % 2 == 1;
+    flip[p] = odd ? s.volume[p] > 0 : s.volume[p] < 0;
+    if (flip[p]) ++(odd ? inner : outer);
+  }
+  for (std::size_t f = 0; f < m.triangles.size(); ++f)
+    if (flip[s.of_triangle[f]]) std::swap(m.triangles[f][1], m.triangles[f][2]);
+  if (outer) say("reversed all faces to point outward");
+  if (inner)
+    say("reversed the faces of " + (inner == 1
+                                        ? std::string("a cavity to point into it")
+                                        : std::to_string(inner) + " cavities to point into them"));
+}
+
 }  // namespace
 
 std::vector<std::string> MeshReport::problems() const {
@@ -105,10 +175,22 @@ std::vector<std::string> MeshReport::problems() const {
          << self_intersection_examples[k].second << ")";
     out.push_back(os.str());
   }
-  if (components > 1)
-    out.push_back(std::to_string(components) + " separate pieces (expected one solid)");
   const bool topology_ok =
       !boundary_edges && !non_manifold_edges && !inconsistent_edges && triangles;
+  const std::size_t separate = outer_pieces ? outer_pieces : components;
+  if (separate > 1)
+    out.push_back(std::to_string(separate) + " separate pieces (expected one solid)");
+  // Pieces are named by one of their faces.
+  auto pieces = [&](std::size_t n, const std::vector<std::size_t>& faces) {
+    return n == 1 ? "1 piece (the piece of face " + list(faces) + ")"
+                  : std::to_string(n) + " pieces (e.g. those of faces " + list(faces) + ")";
+  };
+  if (outward_inner_pieces)
+    out.push_back(pieces(outward_inner_pieces, outward_inner_examples) +
+                  " inside the solid wound outward: a cavity's faces must point into the cavity");
+  if (loose_pieces)
+    out.push_back(pieces(loose_pieces, loose_examples) +
+                  " lying loose inside a cavity: make each solid a separate asset");
   if (topology_ok && !(volume > 0)) {
     std::ostringstream os;
     os << "signed volume " << volume << " m^3 is not positive (faces wound inward)";
@@ -138,8 +220,6 @@ MeshReport check_mesh(const SurfaceMesh& m) {
   // each direction.
   std::map<std::pair<uint32_t, uint32_t>, std::pair<int, int>>
       edges;  // (lo, hi) -> (lo->hi, hi->lo)
-  UnionFind faces(m.triangles.size());
-  std::map<std::pair<uint32_t, uint32_t>, std::size_t> first_face;
   for (std::size_t f = 0; f < m.triangles.size(); ++f) {
     const auto& t = m.triangles[f];
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2] ||
@@ -153,8 +233,6 @@ MeshReport check_mesh(const SurfaceMesh& m) {
       const auto key = std::minmax(a, b);
       auto& uses = edges[key];
       (a < b ? uses.first : uses.second)++;
-      auto [it, fresh] = first_face.emplace(key, f);
-      if (!fresh) faces.unite(f, it->second);
     }
   }
   for (const auto& [e, uses] : edges) {
@@ -170,7 +248,7 @@ MeshReport check_mesh(const SurfaceMesh& m) {
       note(r.inconsistent_examples, e);
     }
   }
-  for (std::size_t f = 0; f < m.triangles.size(); ++f) r.components += faces.find(f) == f;
+  classify_pieces(m, r);
 
   // Vertex fans: the faces around a manifold vertex are connected through edges at that vertex.
   std::vector<std::vector<std::size_t>> around(m.vertices.size());
@@ -293,12 +371,6 @@ std::vector<std::string> repair_mesh(SurfaceMesh& m, const RepairOptions& option
     say("self-intersections: " + std::to_string(pairs.size()) + " face pairs -> " +
         std::to_string(after.size()) + (cleaned ? "" : " (CGAL could not remove them all)"));
   }
-  const std::size_t faces_all = mesh.number_of_faces();
-  if (const std::size_t dropped = PMP::keep_largest_connected_components(mesh, 1)) {
-    mesh.collect_garbage();
-    say("removed " + std::to_string(dropped) + " small separate pieces (" +
-        std::to_string(faces_all - mesh.number_of_faces()) + " triangles), keeping the largest");
-  }
   // Needle and sliver triangles (typical after hole filling and self-intersection removal) force
   // sliver tetrahedra; remesh the surface isotropically at its mean edge length when any are left.
   double min_angle = 180, edge_sum = 0;
@@ -326,11 +398,10 @@ std::vector<std::string> repair_mesh(SurfaceMesh& m, const RepairOptions& option
         min_angle, target, before, std::size_t(mesh.number_of_faces()));
     say(buf);
   }
-  if (CGAL::is_closed(mesh) && !PMP::is_outward_oriented(mesh)) {
-    PMP::reverse_face_orientations(mesh);
-    say("reversed all faces to point outward");
-  }
+  const bool closed = CGAL::is_closed(mesh);
   m = from_mesh(mesh);
+  keep_largest_solid(m, say);
+  if (closed) orient_pieces(m, say);
   return log;
 }
 

@@ -11,6 +11,7 @@
 #include "chladni/core/version.hpp"
 #include "chladni/precompute/mode_error.hpp"
 #include "solve_to_tolerance.hpp"
+#include "surface_pieces.hpp"
 #include "surface_sample.hpp"
 
 namespace chladni::precompute {
@@ -85,6 +86,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   r.dofs = fp.dofs;
   r.nonzeros = fp.nonzeros;
   r.eigen = std::move(fp.eigen);
+  first = outer_surface(first);  // a hollow body's cavities neither radiate nor get struck
   const Eigen::MatrixXd shapes = sample_on_surface(fp.tets, r.eigen.vectors, first);
   surface = std::move(first);
   r.computed = r.eigen.lambda.size();

@@ -14,6 +14,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
 #include "split_long_edges.hpp"
+#include "surface_pieces.hpp"
 #include "tetgen_child.hpp"
 
 namespace chladni::precompute {
@@ -52,6 +53,21 @@ void set_points(tetgenio& in, const std::vector<Vec3>& points) {
   in.pointlist = new REAL[3 * points.size()];
   for (std::size_t v = 0; v < points.size(); ++v)
     for (int k = 0; k < 3; ++k) in.pointlist[3 * v + k] = points[v][k];
+}
+
+// TetGen fills every region the facets enclose unless told which are holes: one point inside
+// each cavity of a hollow body.
+void set_cavities(tetgenio& in, const SurfaceMesh& s) {
+  const SurfacePieces pieces = surface_pieces(s);
+  std::vector<Vec3> holes;
+  for (std::size_t p = 0; p < pieces.count() && pieces.nested(); ++p)
+    if (pieces.depth[p] % 2 == 1 && pieces.volume[p] < 0)
+      holes.push_back(point_in_cavity(s, pieces, p));
+  if (holes.empty()) return;
+  in.numberofholes = static_cast<int>(holes.size());
+  in.holelist = new REAL[3 * holes.size()];
+  for (std::size_t h = 0; h < holes.size(); ++h)
+    for (int k = 0; k < 3; ++k) in.holelist[3 * h + k] = holes[h][k];
 }
 
 // TetGen's points and tetrahedra, each tetrahedron positively oriented.
@@ -114,6 +130,7 @@ TetMesh run_tetgen(const SurfaceMesh& s, const TetOptions& o, bool keep_surface)
     for (int k = 0; k < 3; ++k)
       fc.polygonlist[0].vertexlist[k] = static_cast<int>(s.triangles[f][k]);
   }
+  set_cavities(in, s);
   // p: piecewise linear complex; Y: no Steiner points on the surface; q: quality bounds;
   // a: volume bound; z: zero-based; Q: quiet.
   std::string sw = keep_surface ? "pzQY" : "pzQ";

@@ -42,7 +42,12 @@ struct MeshReport {
   std::vector<std::pair<uint32_t, uint32_t>> inconsistent_examples;
   std::size_t non_manifold_vertices = 0;
   std::vector<uint32_t> non_manifold_vertex_examples;
-  std::size_t components = 0;
+  std::size_t components = 0;  ///< connected pieces, cavities included
+  /// Of those, when the surface is closed and they could be compared: outer pieces (one for a
+  /// solid), cavities (pieces inside one, wound into themselves), pieces inside the material but
+  /// wound outward, and loose pieces lying in a cavity. Each example names a face of the piece.
+  std::size_t outer_pieces = 0, cavities = 0, outward_inner_pieces = 0, loose_pieces = 0;
+  std::vector<std::size_t> outward_inner_examples, loose_examples;
   bool self_intersections_checked = false;
   std::size_t self_intersections = 0;  ///< intersecting face pairs
   std::vector<std::pair<std::size_t, std::size_t>> self_intersection_examples;
@@ -55,7 +60,8 @@ struct MeshReport {
 };
 
 /// Closed, 2-manifold, consistently and outward oriented, no degenerate faces, no
-/// self-intersections, positive volume, finite coordinates, one connected component.
+/// self-intersections, positive volume, finite coordinates, one outer piece, with any cavities
+/// inside it wound so that their faces point into the cavity (a hollow body).
 MeshReport check_mesh(const SurfaceMesh& mesh);
 
 /// Throws InputError("<origin>: mesh is not a valid solid: ...") listing every problem.
@@ -68,8 +74,9 @@ struct RepairOptions {
 
 /// Standard fixes in order: merge duplicate vertices and drop degenerate or duplicate triangles,
 /// orient consistently, stitch borders, remove degenerate faces, fill small holes, remove
-/// self-intersections where CGAL can, keep the largest piece, remesh needle triangles, orient
-/// outward. Returns one line per change made.
+/// self-intersections where CGAL can, remesh needle triangles, keep the largest piece with the
+/// cavities inside it, orient each piece to bound the solid (outer faces out, cavity faces into
+/// the cavity). Returns one line per change made.
 std::vector<std::string> repair_mesh(SurfaceMesh& mesh, const RepairOptions& options = {});
 
 }  // namespace chladni::precompute

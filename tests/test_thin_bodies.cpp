@@ -1,0 +1,202 @@
+// Thin bodies against their analytic modes, at default settings. Hollow bodies: an outer surface
+// with cavities inside it; the check accepts them, the mesh leaves the cavity empty, and a thin
+// spherical shell rings at Lamb's frequency. A free circular plate against Kirchhoff's.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "chladni/core/material.hpp"
+#include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
+#include "chladni/precompute/tet_mesh.hpp"
+#include "fem_fixtures.hpp"
+
+using namespace chladni;
+using namespace chladni::precompute;
+
+namespace {
+
+constexpr double kR = 0.1, kWall = 0.003;
+
+double volume_of(const SurfaceMesh& m) {
+  double v = 0;
+  for (const auto& t : m.triangles)
+    v += dot(m.vertices[t[0]], cross(m.vertices[t[1]], m.vertices[t[2]])) / 6;
+  return v;
+}
+
+std::string problems_of(const SurfaceMesh& m) {
+  std::string s;
+  for (const std::string& p : check_mesh(m).problems()) s += p + "\n";
+  return s;
+}
+
+bool logged(const std::vector<std::string>& log, const std::string& text) {
+  for (const std::string& line : log)
+    if (line.find(text) != std::string::npos) return true;
+  return false;
+}
+
+}  // namespace
+
+TEST(HollowBody, CheckAcceptsACavityWoundIntoItself) {
+  const SurfaceMesh m = test::hollow_sphere(kR, kWall, 2);
+  const MeshReport r = check_mesh(m);
+  EXPECT_TRUE(r.ok()) << problems_of(m);
+  EXPECT_EQ(r.components, 2u);
+  EXPECT_EQ(r.outer_pieces, 1u);
+  EXPECT_EQ(r.cavities, 1u);
+  EXPECT_NEAR(r.volume,
+              volume_of(test::icosphere(kR, 2)) - volume_of(test::icosphere(kR - kWall, 2)), 1e-12);
+}
+
+TEST(HollowBody, MisplacedPiecesAreNamedAndRepaired) {
+  const SurfaceMesh outer = test::icosphere(kR, 2), inner = test::icosphere(kR - kWall, 2);
+  const std::size_t n = outer.triangles.size();
+
+  // The cavity wound like a solid: named by its first face, repaired by reversing it.
+  SurfaceMesh m = test::with_piece(outer, inner, false);
+  EXPECT_NE(problems_of(m).find("1 piece (the piece of face " + std::to_string(n) +
+                                ") inside the solid wound outward"),
+            std::string::npos)
+      << problems_of(m);
+  std::vector<std::string> log = repair_mesh(m);
+  EXPECT_TRUE(logged(log, "reversed the faces of a cavity to point into it"));
+  EXPECT_TRUE(check_mesh(m).ok()) << problems_of(m);
+  EXPECT_EQ(check_mesh(m).cavities, 1u);
+
+  // A ball loose in the cavity is a separate asset: named, and removed by repair, which keeps
+  // the cavity.
+  m = test::with_piece(test::hollow_sphere(kR, kWall, 2), test::icosphere(0.03, 1), false);
+  EXPECT_NE(problems_of(m).find("1 piece (the piece of face " + std::to_string(2 * n) +
+                                ") lying loose inside a cavity"),
+            std::string::npos)
+      << problems_of(m);
+  log = repair_mesh(m);
+  EXPECT_TRUE(logged(log,
+                     "removed 1 separate pieces (80 triangles), keeping the largest and the "
+                     "cavity inside it"));
+  EXPECT_TRUE(check_mesh(m).ok()) << problems_of(m);
+  EXPECT_EQ(check_mesh(m).cavities, 1u);
+
+  // Two balls side by side stay two pieces, however each is wound.
+  SurfaceMesh apart = test::icosphere(0.05, 1);
+  for (Vec3& v : apart.vertices) v[0] += 0.3;
+  m = test::with_piece(outer, apart, true);
+  EXPECT_NE(problems_of(m).find("2 separate pieces"), std::string::npos) << problems_of(m);
+  log = repair_mesh(m);
+  EXPECT_TRUE(check_mesh(m).ok()) << problems_of(m);
+  EXPECT_EQ(check_mesh(m).cavities, 0u);
+  EXPECT_EQ(m.triangles.size(), n);
+}
+
+TEST(HollowBody, TetrahedraFillTheWallAndNotTheCavity) {
+  const SurfaceMesh m = test::hollow_sphere(kR, kWall, 2);
+  const TetMesh t = tetrahedralize(m, TetOptions{});
+  double v = 0, innermost = INFINITY;
+  for (std::size_t e = 0; e < t.tets.size(); ++e) {
+    v += tet_volume(t, e);
+    for (uint32_t n : t.tets[e]) innermost = std::min(innermost, norm(t.nodes[n]));
+  }
+  EXPECT_NEAR(v / volume_of(m), 1.0, 1e-9);
+  EXPECT_GT(innermost, (kR - kWall) * 0.98);  // no node inside the cavity
+}
+
+// A thin spherical shell's lowest modes are the five n = 2 modes of Lamb's membrane shell:
+// Omega^4 - (1 + 3 nu + L) Omega^2 + (L - 2)(1 - nu^2) = 0 with L = n (n + 1) and
+// Omega = omega a sqrt(rho (1 - nu^2) / E) (Junger & Feit, Sound, Structures and Their
+// Interaction, ch. 7). Bending raises them by about h^2 / a^2, 0.1 % here. The soundbank's
+// surface is the outer one, the only one the air touches.
+TEST(HollowBody, ThinSphericalShellRingsAtLambsFrequency) {
+  const SurfaceMesh m = test::hollow_sphere(kR, kWall, 3);
+  PrecomputeOptions o;
+  o.max_modes = 5;
+  o.transfer = false;
+  PrecomputeReport r;
+  const Soundbank b = precompute_surface(m, "shell", o, r);
+  ASSERT_TRUE(r.converged) << r.unconverged_reason;
+  ASSERT_EQ(b.omega.size(), 5u);
+  EXPECT_EQ(r.mesh.cavities, 1u);
+
+  // The faceted spheres' radii, by their volumes.
+  const double ro = std::cbrt(3 * volume_of(test::icosphere(kR, 3)) / (4 * std::numbers::pi));
+  const double ri =
+      std::cbrt(3 * volume_of(test::icosphere(kR - kWall, 3)) / (4 * std::numbers::pi));
+  const double a = (ro + ri) / 2, L = 6;
+  const Material steel = find_material("steel");
+  const double nu = steel.poisson_ratio;
+  const double p = 1 + 3 * nu + L;
+  const double omega2 = (p - std::sqrt(p * p - 4 * (1 - nu * nu) * (L - 2))) / 2;
+  const double f = std::sqrt(omega2) / a *
+                   std::sqrt(steel.youngs_modulus / (steel.density * (1 - nu * nu))) /
+                   (2 * std::numbers::pi);
+  for (std::size_t i = 0; i < 5; ++i)
+    EXPECT_NEAR(b.omega[i] / (2 * std::numbers::pi) / f, 1.0, 0.005) << "mode " << i << ", " << f;
+
+  EXPECT_EQ(b.vertices.size(), test::icosphere(kR, 3).vertices.size());
+  for (const Vec3& v : b.vertices) EXPECT_NEAR(norm(v), kR, 1e-9);
+}
+
+namespace {
+
+// Leissa, Vibration of Plates, eq. 2.12: the free circular Kirchhoff plate's frequency
+// equation in lambda = a (rho h omega^2 / D)^(1/4) for n nodal diameters, cross-multiplied.
+double free_plate_equation(unsigned n, double l, double nu) {
+  const double J = std::cyl_bessel_j(n, l), I = std::cyl_bessel_i(n, l);
+  const double Jp = n == 0 ? -std::cyl_bessel_j(1, l)
+                           : (std::cyl_bessel_j(n - 1, l) - std::cyl_bessel_j(n + 1, l)) / 2;
+  const double Ip = n == 0 ? std::cyl_bessel_i(1, l)
+                           : (std::cyl_bessel_i(n - 1, l) + std::cyl_bessel_i(n + 1, l)) / 2;
+  const double n2 = double(n * n), k = 1 - nu;
+  const double a = l * l * J + k * (l * Jp - n2 * J), b = l * l * I - k * (l * Ip - n2 * I);
+  const double c = l * l * l * Jp + k * n2 * (l * Jp - J);
+  const double d = l * l * l * Ip - k * n2 * (l * Ip - I);
+  return a * d - b * c;
+}
+
+// The plate's frequencies below lambda = 8, each as often as it is degenerate.
+std::vector<double> free_plate_frequencies(double radius, double h, const Material& m) {
+  const double nu = m.poisson_ratio;
+  const double D = m.youngs_modulus * h * h * h / (12 * (1 - nu * nu));
+  const double scale = std::sqrt(D / (m.density * h)) / (2 * std::numbers::pi * radius * radius);
+  std::vector<double> f;
+  for (unsigned n = 0; n <= 6; ++n)
+    for (double l = 0.5; l < 8; l += 0.01) {  // from 0.5: no rigid motion
+      double lo = l, hi = l + 0.01;
+      if ((free_plate_equation(n, lo, nu) > 0) == (free_plate_equation(n, hi, nu) > 0)) continue;
+      for (int it = 0; it < 60; ++it) {
+        const double mid = (lo + hi) / 2;
+        ((free_plate_equation(n, mid, nu) > 0) == (free_plate_equation(n, lo, nu) > 0) ? lo : hi) =
+            mid;
+      }
+      for (unsigned copy = 0; copy < (n ? 2u : 1u); ++copy) f.push_back(lo * lo * scale);
+    }
+  std::sort(f.begin(), f.end());
+  return f;
+}
+
+}  // namespace
+
+// A disc exported as a CAD program does, caps as fans of needle triangles: the first nine modes
+// at defaults against Kirchhoff's free plate of the prism's area (h / a = 0.02, so shear and
+// rotary inertia, which the solid has and the thin plate lacks, stay below 0.2 %).
+TEST(ThinBody, FreeCircularPlateMatchesKirchhoff) {
+  const double radius = 0.1, h = 0.002;
+  const int sides = 64;
+  PrecomputeOptions o;
+  o.max_modes = 9;
+  o.transfer = false;
+  PrecomputeReport r;
+  const Soundbank b = precompute_surface(test::disc_prism(radius, h, sides), "disc", o, r);
+  ASSERT_TRUE(r.converged) << r.unconverged_reason;
+  ASSERT_EQ(b.omega.size(), 9u);
+  const double area_radius =
+      radius * std::sqrt(sides / (2 * std::numbers::pi) * std::sin(2 * std::numbers::pi / sides));
+  const std::vector<double> f = free_plate_frequencies(area_radius, h, find_material("steel"));
+  ASSERT_GE(f.size(), 9u);
+  for (std::size_t i = 0; i < 9; ++i)
+    EXPECT_NEAR(b.omega[i] / (2 * std::numbers::pi) / f[i], 1.0, 0.005)
+        << "mode " << i << ": Kirchhoff " << f[i] << " Hz";
+}
