@@ -180,8 +180,10 @@ std::vector<double> free_plate_frequencies(double radius, double h, const Materi
 }  // namespace
 
 // A disc exported as a CAD program does, caps as fans of needle triangles: the first nine modes
-// at defaults against Kirchhoff's free plate of the prism's area (h / a = 0.02, so shear and
-// rotary inertia, which the solid has and the thin plate lacks, stay below 0.2 %).
+// at defaults within the 1 % tolerance of Kirchhoff's free plate of the prism's area (h / a =
+// 0.02, so shear and rotary inertia, which the solid has and the thin plate lacks, stay below
+// 0.2 %). The refinement follows the error: mending the flat first mesh's quality would take
+// TetGen to 26,812 tetrahedra, 0.05 %.
 TEST(ThinBody, FreeCircularPlateMatchesKirchhoff) {
   const double radius = 0.1, h = 0.002;
   const int sides = 64;
@@ -196,7 +198,8 @@ TEST(ThinBody, FreeCircularPlateMatchesKirchhoff) {
       radius * std::sqrt(sides / (2 * std::numbers::pi) * std::sin(2 * std::numbers::pi / sides));
   const std::vector<double> f = free_plate_frequencies(area_radius, h, find_material("steel"));
   ASSERT_GE(f.size(), 9u);
+  EXPECT_LT(r.passes.back().tets, 10000u);
   for (std::size_t i = 0; i < 9; ++i)
-    EXPECT_NEAR(b.omega[i] / (2 * std::numbers::pi) / f[i], 1.0, 0.005)
+    EXPECT_NEAR(b.omega[i] / (2 * std::numbers::pi) / f[i], 1.0, o.tolerance)
         << "mode " << i << ": Kirchhoff " << f[i] << " Hz";
 }

@@ -102,6 +102,30 @@ std::vector<double> local_bounds(const FemPass& f, double worst, double s, doubl
   return bound;
 }
 
+// TetGen's refinement also mends the quality of every tetrahedron it may, and where the last
+// mesh is one flat layer (a plate meshed under -Y) that alone multiplies it: a 2 mm disc went
+// from 1,152 to 26,812 tetrahedra where the bounds asked for 1,764, and overshot the tolerance
+// twenty-fold. Bisection grows only where asked; its mesh replaces TetGen's when TetGen made
+// over kRunaway times as many tetrahedra (5.1 on that disc). On the bundled meshes TetGen made
+// 0.8-2.7 times what bisection makes, and its better-shaped tetrahedra are worth it there: a
+// thin fin reaches 1 % with fewer of them.
+constexpr double kRunaway = 4;
+
+void prefer_bisection_to_a_runaway(const TetMesh& last, const std::vector<double>& halving,
+                                   const Progress& p, TetMesh& tets) {
+  double at_least = 0;  // what bisection makes, before the splits conformity adds
+  for (std::size_t e = 0; e < last.tets.size(); ++e)
+    at_least += halving[e] > 0 ? std::max(1.0, std::abs(tet_volume(last, e)) / halving[e]) : 1.0;
+  if (double(tets.tets.size()) <= kRunaway * at_least) return;
+  TetMesh bisected = bisect_tets(last, halving);
+  if (double(tets.tets.size()) <= kRunaway * double(bisected.tets.size())) return;
+  if (p.note)
+    p.note("TetGen's refinement made " + std::to_string(tets.tets.size()) +
+           " tetrahedra, bisection " + std::to_string(bisected.tets.size()) +
+           ": taking the bisected mesh");
+  tets = std::move(bisected);
+}
+
 // The next mesh, refined by `s` where the error lies: locally (TetGen refining `best`'s mesh,
 // or where TetGen fails, longest-edge bisection of the same tetrahedra) unless
 // o.local_refinement is off, else the surface meshed again under one smaller bound.
@@ -112,8 +136,10 @@ bool next_mesh(const SurfaceMesh& surface, const FemPass& best, double worst, do
                double& meshed, PrecomputeReport& r) {
   if (o.local_refinement) {
     meshed = s * s * s * r.max_tet_volume;
+    const std::vector<double> halving = local_bounds(best, worst, s, r.max_tet_volume, 1, o);
     try {
       tets = refine_tets(best.tets, local_bounds(best, worst, s, r.max_tet_volume, 2, o), topt);
+      prefer_bisection_to_a_runaway(best.tets, halving, p, tets);
       return true;
     } catch (const InputError& e) {
       if (p.note)
@@ -121,7 +147,7 @@ bool next_mesh(const SurfaceMesh& surface, const FemPass& best, double worst, do
                "); bisecting the marked tetrahedra instead");
     }
     try {
-      tets = bisect_tets(best.tets, local_bounds(best, worst, s, r.max_tet_volume, 1, o));
+      tets = bisect_tets(best.tets, halving);
       return true;
     } catch (const InputError& e) {
       if (p.note) p.note(std::string("bisection failed (") + e.what() + "); refining all");
