@@ -16,7 +16,8 @@ namespace chladni::precompute {
 
 struct ModeErrors {
   /// Per mode: estimated (f_h - f) / f (measured against finer solves: 0.7 to 1.3 times the
-  /// actual error on the bundled bar, docs/validation.md).
+  /// actual error on the bundled bar, docs/validation.md). Blind to what a mesh of one layer
+  /// cannot carry (a square bar's twist); solve_to_tolerance confirms such meshes.
   std::vector<double> relative;
   /// Per element: its largest share of any mode's relative estimate (sum over elements of one
   /// mode's shares is that mode's `relative`).
