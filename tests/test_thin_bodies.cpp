@@ -5,13 +5,17 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <numbers>
 
 #include "chladni/core/material.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
+#include "cli_support.hpp"
 #include "fem_fixtures.hpp"
+#include "test_support.hpp"
 
 using namespace chladni;
 using namespace chladni::precompute;
@@ -102,6 +106,25 @@ TEST(HollowBody, TetrahedraFillTheWallAndNotTheCavity) {
   }
   EXPECT_NEAR(v / volume_of(m), 1.0, 1e-9);
   EXPECT_GT(innermost, (kR - kWall) * 0.98);  // no node inside the cavity
+}
+
+// From the command line: the summary says the body is hollow, --json counts the cavity, and the
+// soundbank's surface is the outer sphere alone.
+TEST(HollowBody, CliSaysHollowAndTheBankKeepsTheOuterSurface) {
+  const std::string obj = test::temp_path("chladni_hollow.obj");
+  const std::string bank = test::temp_path("chladni_hollow.chbank");
+  const std::string json = test::temp_path("chladni_hollow.json");
+  write_obj(obj, test::hollow_sphere(kR, kWall, 2));
+  test::CliResult r = test::run_cli("precompute " + obj + " -o " + bank + " --json " + json +
+                                    " --max-modes 5 --no-transfer");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("hollow (1 cavity)"), std::string::npos) << r.output;
+  EXPECT_EQ(nlohmann::json::parse(std::ifstream(json))["surface"]["cavities"], 1);
+  r = test::run_cli("info " + bank + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json info = nlohmann::json::parse(r.output);
+  EXPECT_EQ(info["surface"]["vertices"], test::icosphere(kR, 2).vertices.size());
+  EXPECT_EQ(info["surface"]["triangles"], test::icosphere(kR, 2).triangles.size());
 }
 
 // A thin spherical shell's lowest modes are the five n = 2 modes of Lamb's membrane shell:
