@@ -67,11 +67,13 @@ std::string edges_text(const std::vector<std::pair<uint32_t, uint32_t>>& e) {
   return os.str();
 }
 
-// Pieces and, on a closed consistently wound surface, their nesting: a piece at odd depth is a
-// cavity when its volume is negative (faces into it), one at even depth > 0 lies loose in one.
+// Pieces, the signed volume they bound together and, on a closed consistently wound surface,
+// their nesting: a piece at odd depth is a cavity when its volume is negative (faces into it),
+// one at even depth > 0 lies loose in one.
 void classify_pieces(const SurfaceMesh& m, MeshReport& r) {
   const SurfacePieces s = surface_pieces(m);
   r.components = s.count();
+  r.volume = std::accumulate(s.volume.begin(), s.volume.end(), 0.0);
   if (!s.nested() || r.boundary_edges || r.non_manifold_edges || r.inconsistent_edges) return;
   for (std::size_t p = 0; p < s.count(); ++p) {
     if (s.depth[p] == 0) {
@@ -79,7 +81,7 @@ void classify_pieces(const SurfaceMesh& m, MeshReport& r) {
     } else if (s.depth[p] % 2 == 0) {
       ++r.loose_pieces;
       note(r.loose_examples, s.first_triangle[p]);
-    } else if (s.volume[p] < 0) {
+    } else if (s.is_cavity(p)) {
       ++r.cavities;
     } else {
       ++r.outward_inner_pieces;
@@ -272,16 +274,6 @@ MeshReport check_mesh(const SurfaceMesh& m) {
       note(r.non_manifold_vertex_examples, v);
     }
   }
-
-  // Signed volume by the divergence theorem (sum of signed tetrahedra to the origin).
-  double vol = 0;
-  for (const auto& t : m.triangles) {
-    const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
-    vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
-            a[2] * (b[0] * c[1] - b[1] * c[0])) /
-           6.0;
-  }
-  r.volume = vol;
 
   // Self-intersections need a halfedge structure: only when the soup is a valid polygon mesh.
   const auto polys = to_polygons(m);

@@ -152,10 +152,8 @@ constexpr double kRunaway = 4;
 
 void prefer_bisection_to_a_runaway(const TetMesh& last, const std::vector<double>& halving,
                                    const Progress& p, TetMesh& tets) {
-  double at_least = 0;  // what bisection makes, before the splits conformity adds
-  for (std::size_t e = 0; e < last.tets.size(); ++e)
-    at_least += halving[e] > 0 ? std::max(1.0, std::abs(tet_volume(last, e)) / halving[e]) : 1.0;
-  if (double(tets.tets.size()) <= kRunaway * at_least) return;
+  // What bisection makes before the splits conformity adds: a cheap test first.
+  if (double(tets.tets.size()) <= kRunaway * tetrahedra_asked(last, halving)) return;
   TetMesh bisected = bisect_tets(last, halving);
   if (double(tets.tets.size()) <= kRunaway * double(bisected.tets.size())) return;
   if (p.note)

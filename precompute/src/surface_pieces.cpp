@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <numbers>
 #include <numeric>
 #include <unordered_map>
+#include <utility>
 
 #include "chladni/core/error.hpp"
 #include "edge_key.hpp"
@@ -115,15 +117,14 @@ double ray_depth(const SurfaceMesh& m, const Vec3& o, const Vec3& dir, uint32_t 
 }
 
 Vec3 point_in_cavity(const SurfaceMesh& m, const SurfacePieces& s, std::size_t piece) {
-  std::vector<std::size_t> faces;
-  for (std::size_t f = 0; f < m.triangles.size(); ++f)
-    if (s.of_triangle[f] == piece) faces.push_back(f);
-  auto area2 = [&](std::size_t f) {
+  std::vector<std::pair<double, std::size_t>> faces;  // (twice the area, face), largest first
+  for (std::size_t f = 0; f < m.triangles.size(); ++f) {
     const auto& t = m.triangles[f];
-    return norm(triangle_normal(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]));
-  };
-  std::sort(faces.begin(), faces.end(),
-            [&](std::size_t a, std::size_t b) { return area2(a) > area2(b); });
+    if (s.of_triangle[f] == piece)
+      faces.emplace_back(
+          norm(triangle_normal(m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]])), f);
+  }
+  std::sort(faces.begin(), faces.end(), std::greater<>());
   const SurfaceMesh piece_only = keep_pieces(m, s, [&] {
     std::vector<bool> k(s.count(), false);
     k[piece] = true;
@@ -131,7 +132,7 @@ Vec3 point_in_cavity(const SurfaceMesh& m, const SurfacePieces& s, std::size_t p
   }());
   // A ray may graze an edge of the far side and miss; a few faces make that irrelevant.
   for (std::size_t k = 0; k < std::min<std::size_t>(faces.size(), 8); ++k) {
-    const auto& t = m.triangles[faces[k]];
+    const auto& t = m.triangles[faces[k].second];
     const Vec3 &a = m.vertices[t[0]], &b = m.vertices[t[1]], &c = m.vertices[t[2]];
     const Vec3 n2 = triangle_normal(a, b, c);
     const double len = norm(n2);

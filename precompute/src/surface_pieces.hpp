@@ -21,6 +21,8 @@ struct SurfacePieces {
   std::vector<int> parent;  ///< innermost enclosing piece, -1 for an outer one
   std::size_t count() const { return volume.size(); }
   bool nested() const { return !depth.empty(); }
+  /// Inside an odd number of pieces and wound into itself: a hollow body's cavity.
+  bool is_cavity(std::size_t p) const { return nested() && depth[p] % 2 == 1 && volume[p] < 0; }
 };
 
 /// Pieces joined through shared edges (pieces touching at a vertex only are separate), their

@@ -60,9 +60,8 @@ void set_points(tetgenio& in, const std::vector<Vec3>& points) {
 void set_cavities(tetgenio& in, const SurfaceMesh& s) {
   const SurfacePieces pieces = surface_pieces(s);
   std::vector<Vec3> holes;
-  for (std::size_t p = 0; p < pieces.count() && pieces.nested(); ++p)
-    if (pieces.depth[p] % 2 == 1 && pieces.volume[p] < 0)
-      holes.push_back(point_in_cavity(s, pieces, p));
+  for (std::size_t p = 0; p < pieces.count(); ++p)
+    if (pieces.is_cavity(p)) holes.push_back(point_in_cavity(s, pieces, p));
   if (holes.empty()) return;
   in.numberofholes = static_cast<int>(holes.size());
   in.holelist = new REAL[3 * holes.size()];
@@ -281,6 +280,13 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
   }
 }
 
+double tetrahedra_asked(const TetMesh& mesh, const std::vector<double>& max_volume) {
+  double asked = 0;
+  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
+    asked += max_volume[e] > 0 ? std::max(1.0, std::abs(tet_volume(mesh, e)) / max_volume[e]) : 1.0;
+  return asked;
+}
+
 TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
                     const TetOptions& o) {
   if (max_volume.size() != mesh.tets.size())
@@ -291,10 +297,7 @@ TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
   // A refinement that runs away (coupling.obj: 17 GB in 17 minutes) fails once it far exceeds
   // what was asked: 16 KB per tetrahedron the bounds call for (TetGen takes about 4 KB while
   // refining), at least 2 GB. Bisection then takes over.
-  double asked = 0;
-  for (std::size_t e = 0; e < mesh.tets.size(); ++e)
-    asked += bounds[e] > 0 ? std::max(1.0, std::abs(tet_volume(mesh, e)) / bounds[e]) : 1.0;
-  const double allowance = std::max(2e9, 16e3 * asked);
+  const double allowance = std::max(2e9, 16e3 * tetrahedra_asked(mesh, bounds));
   for (int attempt = 0;; ++attempt) {
     std::string crash;
     auto job = [&] {

@@ -62,6 +62,10 @@ TetQuality tet_quality(const TetMesh& mesh);
 TetMesh refine_tets(const TetMesh& mesh, const std::vector<double>& max_volume,
                     const TetOptions& options);
 
+/// How many tetrahedra `max_volume` (as for refine_tets) asks of `mesh` at least: each
+/// tetrahedron's volume over its bound, and one where that is less or it has none.
+double tetrahedra_asked(const TetMesh& mesh, const std::vector<double>& max_volume);
+
 /// The same refinement by longest-edge bisection (Rivara), which cannot fail: every
 /// tetrahedron over its bound is halved at its longest edge, its neighbours along the edges cut
 /// as conformity asks, until each is within its bound. Without TetGen's quality bounds, the
