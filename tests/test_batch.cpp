@@ -140,6 +140,19 @@ TEST(BatchManifest, CsvWithQuotesCommentsAndFlags) {
   EXPECT_EQ(m.output_dir, d.string());
 }
 
+// What a spreadsheet saves as "CSV UTF-8": a byte-order mark, CRLF line ends, quoted cells.
+TEST(BatchManifest, CsvFromASpreadsheet) {
+  const fs::path d = fresh_dir("csv-excel");
+  write_box(d / "a b.obj", 0.1, 0.1, 0.1);
+  std::ofstream(d / "list.csv", std::ios::binary)
+      << "\xEF\xBB\xBFmesh,material,name\r\n\"a b.obj\",brass,\"first\"\r\n";
+  const batch::Manifest m = batch::read_manifest((d / "list.csv").string(), "", fake_schema());
+  ASSERT_EQ(m.assets.size(), 1u);
+  EXPECT_EQ(m.assets[0].mesh, (d / "a b.obj").string());
+  EXPECT_EQ(m.assets[0].name, "first");
+  EXPECT_EQ(m.assets[0].args, (std::vector<std::string>{"--material", "brass"}));
+}
+
 TEST(BatchManifest, ErrorsNameTheManifestAndWhere) {
   const fs::path d = fresh_dir("errors");
   write_box(d / "a.obj", 0.1, 0.1, 0.1);
@@ -175,6 +188,7 @@ TEST(BatchManifest, ErrorsNameTheManifestAndWhere) {
   check("m.csv", "mesh,material\na.obj\n", ":2: 1 fields, the header has 2");
   check("m.csv", "mesh,repair\na.obj,maybe\n", ":2: column 'repair': a flag");
   check("m.csv", "mesh\n\"a.obj\n", ":2: unterminated quote");
+  check("m.csv", "mesh,name\na.obj,\"x\"y\n", ":2: 'y' after a closing quote");
 }
 
 // One bad asset is reported and skipped, the others go on; the exit code says not all

@@ -100,7 +100,12 @@ std::map<std::string, std::string> cube_files() {
     stl += " endloop\nendfacet\n";
   }
   stl += "endsolid cube\n";
+  // As Windows editors save text: a byte-order mark before the first keyword.
+  const std::string bom = "\xEF\xBB\xBF";
   return {{"c.obj", obj},
+          {"bom.obj", bom + obj.substr(obj.find("v "))},
+          {"bom.off", bom + off},
+          {"bom.ply", bom + ply},
           {"c.off", off},
           {"c.ply", ply},
           {"cle.ply", ply_binary(false)},

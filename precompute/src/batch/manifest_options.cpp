@@ -99,6 +99,8 @@ std::vector<std::string> to_args(const Options& options) {
 std::vector<CsvRow> parse_csv(const std::string& text, const std::string& path) {
   std::vector<CsvRow> rows;
   std::size_t line = 1, i = 0;
+  // Spreadsheets save "CSV UTF-8" with a byte-order mark and CRLF line ends.
+  if (text.starts_with("\xEF\xBB\xBF")) i = 3;
   while (i < text.size()) {
     CsvRow row;
     row.line = line;
@@ -124,6 +126,11 @@ std::vector<CsvRow> parse_csv(const std::string& text, const std::string& path) 
         cell.clear();
         was_quoted = false;
         if (c == '\n') ++line, end = true;
+      } else if (was_quoted) {  // after the closing quote only blanks (a CRLF's '\r') may follow
+        if (c != ' ' && c != '\t' && c != '\r')
+          throw InputError(
+              path + ":" + std::to_string(line) + ": '" + std::string(1, c) +
+              "' after a closing quote (a quote inside a quoted field is written \"\")");
       } else {
         cell += c;
       }

@@ -30,7 +30,10 @@ SurfaceMesh read_mesh(const std::string& path, double scale) {
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
     throw InputError(path + ": unsupported mesh format '" + ext + "' (use OBJ, OFF, PLY or STL)");
   const std::vector<uint8_t> raw = read_input_file(path, "mesh", kMaxBinaryInputBytes);
-  const std::string_view bytes(reinterpret_cast<const char*>(raw.data()), raw.size());
+  std::string_view bytes(reinterpret_cast<const char*>(raw.data()), raw.size());
+  // A byte-order mark (Windows editors) would glue onto the first keyword. Not for STL, whose
+  // binary header may begin with any bytes.
+  if (ext != ".stl" && bytes.starts_with("\xEF\xBB\xBF")) bytes.remove_prefix(3);
 
   SurfaceMesh m = ext == ".obj"   ? mesh_io::read_obj(bytes, path)
                   : ext == ".off" ? mesh_io::read_off(bytes, path)
