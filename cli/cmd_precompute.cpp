@@ -28,7 +28,7 @@ struct PrecomputeArgs {
   std::string refinement = "local";
   double max_memory_gb = -1;  // negative: 80 % of the memory available
   int order = 2, threads = 0;
-  std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000;
+  std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000, max_surface_triangles = 20000;
   std::string eigensolver = "block", transfer_backend = "auto", transfer_method = "auto";
   bool repair = false, quiet = false, no_transfer = false;
   std::string batch_stamp;
@@ -47,10 +47,10 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                    {"nu", bank.material.poisson_ratio},
                    {"rho", bank.material.density},
                    {"damping", bank.material.damping.to_string()}};
-  j["surface"] = {{"vertices", r.mesh.vertices},
-                  {"triangles", r.mesh.triangles},
-                  {"volume_m3", r.mesh.volume},
-                  {"cavities", r.mesh.cavities}};
+  j["surface"] = {
+      {"vertices", r.mesh.vertices},          {"triangles", r.mesh.triangles},
+      {"volume_m3", r.mesh.volume},           {"cavities", r.mesh.cavities},
+      {"simplified_from", r.simplified_from}, {"simplify_envelope_m", r.simplify_envelope}};
   j["repairs"] = r.repairs;
   j["volume_mesh"] = {{"tetrahedra", r.tets},
                       {"nodes", r.nodes},
@@ -145,6 +145,7 @@ void run_precompute(const PrecomputeArgs& a) {
   o.max_frequency = a.max_freq;
   o.sample_rate = a.sample_rate;
   o.max_tet_volume = a.max_tet_volume;
+  o.max_surface_triangles = a.max_surface_triangles;
   o.tolerance = a.tolerance;
   o.max_passes = a.max_meshes;
   o.local_refinement = a.refinement == "local";
@@ -181,6 +182,9 @@ void run_precompute(const PrecomputeArgs& a) {
   if (a.quiet) return;
   std::printf("mesh %s: %zu vertices, %zu triangles, volume %.4g m^3", a.mesh.c_str(),
               r.mesh.vertices, r.mesh.triangles, r.mesh.volume);
+  if (r.simplified_from)
+    std::printf(" (simplified from %zu triangles, within %.3g mm)", r.simplified_from,
+                r.simplify_envelope * 1e3);
   if (r.mesh.cavities)  // hollow: the cavities' faces are meshed, not put in the soundbank
     std::printf(", hollow (%zu %s)", r.mesh.cavities, r.mesh.cavities == 1 ? "cavity" : "cavities");
   std::printf("\n");
@@ -268,6 +272,12 @@ void add_precompute(CLI::App& app, bool run) {
                   "Largest tetrahedron (m^3; 0: chosen by the solver, refining until the modes "
                   "asked for are within --tolerance)")
       ->check(finite_in(0, 1e6));
+  cmd->add_option("--max-surface-triangles", a->max_surface_triangles,
+                  "A surface of more triangles is simplified toward half as many before "
+                  "meshing, within an envelope that moves no frequency by more than a fifth of "
+                  "--tolerance (0: never; not with --max-tet-volume)")
+      ->check(CLI::Range(std::size_t(0), std::size_t(100000000)))
+      ->capture_default_str();
   cmd->add_option("--tolerance", a->tolerance,
                   "Target relative frequency error of every mode asked for, by the error "
                   "estimate; the mesh is refined where it asks (at most --max-meshes meshes)")
@@ -296,7 +306,8 @@ void add_precompute(CLI::App& app, bool run) {
                   "block (block Lanczos, default) or spectra (Spectra's Lanczos), same operator")
       ->capture_default_str();
   cmd->add_flag("--repair", a->repair, "Try CGAL's standard repairs on a bad mesh and report them");
-  cmd->add_option("--save-surface", a->save_surface, "Write the checked (repaired) surface as OBJ");
+  cmd->add_option("--save-surface", a->save_surface,
+                  "Write the checked (repaired, simplified) surface, the one meshed, as OBJ");
   cmd->add_option("--max-hole-edges", a->max_hole_edges,
                   "--repair fills holes up to this many edges")
       ->check(CLI::Range(3, 1000000))

@@ -10,6 +10,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/version.hpp"
 #include "chladni/precompute/mode_error.hpp"
+#include "simplify_surface.hpp"
 #include "solve_to_tolerance.hpp"
 #include "surface_pieces.hpp"
 #include "surface_sample.hpp"
@@ -34,6 +35,46 @@ std::vector<std::array<float, 3>> vertex_normals(const SurfaceMesh& m) {
   }
   return out;
 }
+
+namespace {
+
+// The surface meshed is the checked one, or where it is denser than max_surface_triangles a
+// simplification of it, taken only if it is still a valid solid. Returns whether it was taken.
+bool simplify_if_dense(SurfaceMesh& surface, const PrecomputeOptions& o, PrecomputeReport& r,
+                       const Progress& p, Stopwatch& sw) {
+  const std::size_t n = surface.triangles.size();
+  if (o.max_surface_triangles == 0 || n <= o.max_surface_triangles || o.max_tet_volume > 0)
+    return false;
+  sw.start("simplify surface");
+  const double envelope = simplification_envelope(surface, o.tolerance);
+  std::string why;
+  if (envelope > 0) {
+    try {
+      SurfaceMesh simpler =
+          simplify_surface(surface, o.max_surface_triangles / 2, envelope, p.fraction);
+      const MeshReport check = check_mesh(simpler);
+      if (check.ok() && check.outer_pieces == r.mesh.outer_pieces &&
+          check.cavities == r.mesh.cavities && simpler.triangles.size() < n) {
+        r.simplified_from = n, r.simplify_envelope = envelope, r.mesh = check;
+        surface = std::move(simpler);
+        if (p.note)
+          p.note("surface simplified from " + std::to_string(n) + " to " +
+                 std::to_string(surface.triangles.size()) + " triangles, within " +
+                 std::to_string(envelope * 1e3) + " mm of it (--max-surface-triangles)");
+        return true;
+      }
+      why = "the simplified surface is not a valid solid";
+    } catch (const InputError& e) {
+      why = e.what();
+    }
+  } else {
+    why = "no thickness could be measured";
+  }
+  if (p.note) p.note("surface kept at " + std::to_string(n) + " triangles (" + why + ")");
+  return false;
+}
+
+}  // namespace
 
 Soundbank precompute_mesh(const std::string& mesh_path, const PrecomputeOptions& o,
                           PrecomputeReport& r, const Progress& p) {
@@ -70,6 +111,8 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   r.mesh = check_mesh(surface);
   if (!o.save_surface.empty()) write_obj(o.save_surface, surface);
   require_valid(r.mesh, origin, o.repair);
+  if (simplify_if_dense(surface, o, r, p, sw) && !o.save_surface.empty())
+    write_obj(o.save_surface, surface);
 
   EigenOptions eo;
   eo.modes = o.max_modes;

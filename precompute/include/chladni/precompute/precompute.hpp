@@ -16,7 +16,8 @@ namespace chladni::precompute {
 struct PrecomputeOptions {
   double scale = 1.0;  ///< coordinates times scale = metres (unit and --scale combined)
   bool repair = false;
-  std::string save_surface;  ///< when set, the checked (repaired) surface is written here as OBJ
+  /// When set, the checked (repaired, simplified) surface, the one meshed, is written here as OBJ.
+  std::string save_surface;
   RepairOptions repair_options;
   Material material = find_material("steel");
   int order = 2;  ///< quadratic tets by default: linear ones lock in bending (docs/validation.md)
@@ -29,6 +30,10 @@ struct PrecomputeOptions {
   /// or, with max_modes, is the coarsest quality mesh (coarse_max_volume), and it is refined
   /// where the error estimate asks until the modes asked for are within `tolerance`.
   double max_tet_volume = 0;
+  /// A surface of more triangles is simplified toward half as many before it is meshed, within
+  /// an envelope that moves no frequency by more than a fifth of `tolerance`
+  /// (simplify_surface.hpp); 0: never. Not with max_tet_volume, which fixes the elements.
+  std::size_t max_surface_triangles = 20000;
   /// Target relative frequency error of every mode asked for, by the a-posteriori estimate
   /// (mode_error.hpp).
   double tolerance = 0.01;
@@ -60,6 +65,10 @@ struct StageTime {
 struct PrecomputeReport {
   MeshReport mesh;
   std::vector<std::string> repairs;
+  /// Triangles of the checked surface before it was simplified (0: it was not), and the
+  /// envelope (m) the simplified one stays within.
+  std::size_t simplified_from = 0;
+  double simplify_envelope = 0;
   double max_tet_volume = 0;
   /// Per kept mode: the estimated relative frequency error (f_h - f) / f of the final mesh.
   std::vector<double> frequency_error;
