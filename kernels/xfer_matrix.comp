@@ -1,6 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Collocation matrix of the equivalent-source fit (precompute/src/acoustic_transfer.cpp), column
+// Collocation matrix of the equivalent-source fit (precompute/src/transfer/acoustic_transfer.cpp), column
 // major, n_points x n_sources, complex: G(x_p, y_s) = e^(ikr) / (4 pi r), r = |x_p - y_s|, or
 // with `neumann` its normal derivative at x_p, dG/dn = G (ik - 1/r) (x_p - y_s).n_p / r.
 // One invocation per point; neighbouring invocations write neighbouring entries of a column.

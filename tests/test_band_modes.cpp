@@ -5,7 +5,7 @@
 #include <numeric>
 
 #include "../precompute/src/band_modes.hpp"
-#include "../precompute/src/local_thickness.hpp"
+#include "../precompute/src/surface/local_thickness.hpp"
 #include "chladni/core/material.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "fem_fixtures.hpp"

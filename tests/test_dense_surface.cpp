@@ -7,7 +7,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "../precompute/src/simplify_surface.hpp"
+#include "../precompute/src/surface/simplify_surface.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "cli_support.hpp"

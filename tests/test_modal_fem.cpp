@@ -9,8 +9,8 @@
 #include <numbers>
 #include <numeric>
 
-#include "../precompute/src/cholmod_factor.hpp"
-#include "../precompute/src/symmetric_product.hpp"
+#include "../precompute/src/eigen/cholmod_factor.hpp"
+#include "../precompute/src/eigen/symmetric_product.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/eigensolve.hpp"
 #include "chladni/precompute/fem.hpp"

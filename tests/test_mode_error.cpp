@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "../precompute/src/surface_sample.hpp"
+#include "../precompute/src/fem/surface_sample.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/eigensolve.hpp"
 #include "chladni/precompute/fem.hpp"

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <numbers>
 
-#include "local_thickness.hpp"
-#include "split_long_edges.hpp"
+#include "surface/local_thickness.hpp"
+#include "surface/split_long_edges.hpp"
 
 namespace chladni::precompute {
 

@@ -10,10 +10,10 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/version.hpp"
 #include "chladni/precompute/mode_error.hpp"
-#include "simplify_surface.hpp"
+#include "fem/surface_sample.hpp"
 #include "solve_to_tolerance.hpp"
-#include "surface_pieces.hpp"
-#include "surface_sample.hpp"
+#include "surface/simplify_surface.hpp"
+#include "surface/surface_pieces.hpp"
 
 namespace chladni::precompute {
 

@@ -11,10 +11,10 @@
 #include <optional>
 #include <string>
 
+#include "../surface/split_long_edges.hpp"
+#include "../surface/surface_pieces.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
-#include "split_long_edges.hpp"
-#include "surface_pieces.hpp"
 #include "tetgen_child.hpp"
 
 namespace chladni::precompute {

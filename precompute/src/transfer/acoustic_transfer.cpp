@@ -10,12 +10,12 @@
 #include <numbers>
 #include <optional>
 
-#include "blas_threads.hpp"
+#include "../blas_threads.hpp"
+#include "../parallel.hpp"
+#include "../surface/surface_pieces.hpp"
+#include "../timing.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/spherical.hpp"
-#include "parallel.hpp"
-#include "surface_pieces.hpp"
-#include "timing.hpp"
 
 // Level 3 only: this file is built without EIGEN_USE_BLAS because Debian 12's OpenBLAS
 // 0.3.21 zgemv_n kernel reads past the end of its operands (OpenBLAS issue #4013), which

@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <fstream>
 
+#include "../huge_pages.hpp"
 #include "chladni/core/error.hpp"
-#include "huge_pages.hpp"
 #include "shift_invert.hpp"
 
 namespace chladni::precompute {

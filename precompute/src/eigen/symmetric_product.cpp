@@ -1,6 +1,6 @@
 #include "symmetric_product.hpp"
 
-#include "huge_pages.hpp"
+#include "../huge_pages.hpp"
 
 #include <algorithm>
 #include <thread>

@@ -6,9 +6,9 @@
 #include <cmath>
 #include <numbers>
 
+#include "../timing.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
-#include "timing.hpp"
 
 namespace chladni::precompute {
 namespace {

@@ -6,9 +6,9 @@
 
 #include <Eigen/QR>
 
+#include "../parallel.hpp"
 #include "chladni/core/error.hpp"
 #include "fem_element.hpp"
-#include "parallel.hpp"
 
 namespace chladni::precompute {
 namespace {

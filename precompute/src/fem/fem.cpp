@@ -10,9 +10,9 @@
 #include <thread>
 #include <unordered_map>
 
+#include "../huge_pages.hpp"
 #include "chladni/core/error.hpp"
 #include "fem_element.hpp"
-#include "huge_pages.hpp"
 
 namespace chladni::precompute {
 namespace detail {

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "edge_key.hpp"
+#include "../edge_key.hpp"
 
 namespace chladni::precompute {
 namespace {

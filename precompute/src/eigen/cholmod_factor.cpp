@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "../huge_pages.hpp"
 #include "chladni/core/error.hpp"
-#include "huge_pages.hpp"
 
 namespace chladni::precompute {
 namespace {

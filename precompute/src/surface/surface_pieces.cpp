@@ -9,8 +9,8 @@
 #include <unordered_map>
 #include <utility>
 
+#include "../edge_key.hpp"
 #include "chladni/core/error.hpp"
-#include "edge_key.hpp"
 
 namespace chladni::precompute {
 namespace {

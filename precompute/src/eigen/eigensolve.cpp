@@ -14,12 +14,12 @@
 #include <numbers>
 #include <random>
 
+#include "../huge_pages.hpp"
+#include "../timing.hpp"
 #include "chladni/core/error.hpp"
 #include "eigen_memory.hpp"
 #include "eigensolve_dense.hpp"
-#include "huge_pages.hpp"
 #include "shift_invert.hpp"
-#include "timing.hpp"
 
 namespace chladni::precompute {
 namespace {

@@ -10,9 +10,9 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "../edge_key.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
-#include "edge_key.hpp"
 
 namespace chladni::precompute {
 namespace {

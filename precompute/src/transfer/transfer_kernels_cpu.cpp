@@ -1,8 +1,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "../parallel.hpp"
 #include "chladni/precompute/transfer_kernels.hpp"
-#include "parallel.hpp"
 
 namespace chladni::precompute {
 namespace {
