@@ -74,23 +74,7 @@ bool simplify_if_dense(SurfaceMesh& surface, const PrecomputeOptions& o, Precomp
   return false;
 }
 
-}  // namespace
-
-Soundbank precompute_mesh(const std::string& mesh_path, const PrecomputeOptions& o,
-                          PrecomputeReport& r, const Progress& p) {
-  const auto t0 = std::chrono::steady_clock::now();
-  if (p.stage) p.stage("read mesh");
-  SurfaceMesh surface = read_mesh(mesh_path, o.scale);
-  const auto read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  Soundbank bank = precompute_surface(std::move(surface), mesh_path, o, r, p);
-  r.stages.insert(r.stages.begin(), StageTime{"read mesh", read_s});
-  r.total_seconds += read_s;
-  return bank;
-}
-
-Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
-                             const PrecomputeOptions& o, PrecomputeReport& r, const Progress& p) {
-  const auto t_begin = std::chrono::steady_clock::now();
+void validate(const PrecomputeOptions& o) {
   o.material.validate();
   if (o.order != 1 && o.order != 2) throw InputError("--order must be 1 or 2");
   if (!(o.max_frequency > o.min_frequency) || !(o.min_frequency >= 0) ||
@@ -100,42 +84,13 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
     throw InputError("--sample-rate must lie in [8000, 384000] Hz");
   if (!(o.max_tet_volume >= 0) || !std::isfinite(o.max_tet_volume))
     throw InputError("--max-tet-volume must be finite and >= 0");
-  Stopwatch sw(r, p);
-
-  sw.start("check surface");
-  if (o.repair) {
-    r.repairs = repair_mesh(surface, o.repair_options);
-    if (p.note)
-      for (const auto& line : r.repairs) p.note("repair: " + line);
-  }
-  r.mesh = check_mesh(surface);
-  if (!o.save_surface.empty()) write_obj(o.save_surface, surface);
-  require_valid(r.mesh, origin, o.repair);
-  if (simplify_if_dense(surface, o, r, p, sw) && !o.save_surface.empty())
-    write_obj(o.save_surface, surface);
-
-  EigenOptions eo;
-  eo.modes = o.max_modes;
-  eo.max_frequency = o.max_frequency;
-  eo.mode_cap = o.mode_cap;
-  eo.method = o.eigensolver;
-  eo.max_memory = o.max_memory < 0 ? default_memory_budget() : o.max_memory;
   if (!(o.tolerance > 0 && o.tolerance < 1)) throw InputError("--tolerance must lie in (0, 1)");
-  SurfaceMesh first;
-  FemPass fp = solve_to_tolerance(surface, o, eo, p, sw, r, first);
-  r.quality = fp.quality;
-  r.tets = fp.tets.tets.size();
-  r.nodes = fp.nodes;
-  r.dofs = fp.dofs;
-  r.nonzeros = fp.nonzeros;
-  r.eigen = std::move(fp.eigen);
-  first = outer_surface(first);  // a hollow body's cavities neither radiate nor get struck
-  const Eigen::MatrixXd shapes = sample_on_surface(fp.tets, r.eigen.vectors, first);
-  surface = std::move(first);
-  r.computed = r.eigen.lambda.size();
-  for (double res : r.eigen.residual) r.max_residual = std::max(r.max_residual, res);
+}
 
-  sw.start("damping and soundbank");
+// The modes kept (damped, in the band) with their shapes on `surface`; refuses a bank with none.
+Soundbank damped_bank(const SurfaceMesh& surface, const Eigen::MatrixXd& shapes,
+                      const ModeErrors& errors, const std::string& origin,
+                      const PrecomputeOptions& o, PrecomputeReport& r) {
   ModalModel model;
   for (double l : r.eigen.lambda) model.omega.push_back(std::sqrt(std::max(l, 0.0)));
   const ModeSelection sel =
@@ -152,8 +107,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
                      std::to_string(sel.overdamped) +
                      " overdamped): check --unit/--scale, the material, or raise --max-freq");
   }
-
-  for (std::size_t i : sel.kept) r.frequency_error.push_back(fp.errors.relative[i]);
+  for (std::size_t i : sel.kept) r.frequency_error.push_back(errors.relative[i]);
 
   Soundbank bank;
   bank.material = o.material;
@@ -170,34 +124,36 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
     for (std::size_t v = 0; v < nv; ++v)
       for (int k = 0; k < 3; ++k) bank.shapes.push_back(float(col(Eigen::Index(3 * v + k))));
   }
-  r.eigen.vectors.resize(0, 0);
+  return bank;
+}
 
-  if (o.transfer) {
-    sw.start("transfer");
-    const RadiatingSurface rs(surface, o.acoustic);
-    std::unique_ptr<TransferKernels> kernels =
-        o.gpu ? make_gpu_transfer_kernels(o.gpu) : make_cpu_transfer_kernels(1);
-    r.transfer_kernels = kernels->name();
-    AcousticOptions acoustic = o.acoustic;
-    if (acoustic.bem_max_memory <= 0) acoustic.bem_max_memory = eo.max_memory;
-    if (!acoustic.bem.gpu) acoustic.bem.gpu = o.gpu;  // BEM rows on the same device
-    try {
-      bank.transfer = compute_transfer(rs, bank, acoustic, *kernels, &r.transfer_times,
-                                       [&](std::size_t done, std::size_t total) {
-                                         if (p.fraction) p.fraction(double(done) / double(total));
-                                       });
-    } catch (const BudgetError& e) {
-      throw BudgetError(origin + ": " + e.what());
-    }
-    for (std::size_t i = 0; i < bank.transfer->mode_count(); ++i) {
-      r.poor_fits += bank.transfer->poor(i);
-      r.max_held_out = std::max(r.max_held_out, double(bank.transfer->modes[i].held_out_error));
-    }
+void add_transfer(Soundbank& bank, const SurfaceMesh& surface, double max_memory,
+                  const std::string& origin, const PrecomputeOptions& o, PrecomputeReport& r,
+                  const Progress& p) {
+  const RadiatingSurface rs(surface, o.acoustic);
+  std::unique_ptr<TransferKernels> kernels =
+      o.gpu ? make_gpu_transfer_kernels(o.gpu) : make_cpu_transfer_kernels(1);
+  r.transfer_kernels = kernels->name();
+  AcousticOptions acoustic = o.acoustic;
+  if (acoustic.bem_max_memory <= 0) acoustic.bem_max_memory = max_memory;
+  if (!acoustic.bem.gpu) acoustic.bem.gpu = o.gpu;  // BEM rows on the same device
+  try {
+    bank.transfer = compute_transfer(rs, bank, acoustic, *kernels, &r.transfer_times,
+                                     [&](std::size_t done, std::size_t total) {
+                                       if (p.fraction) p.fraction(double(done) / double(total));
+                                     });
+  } catch (const BudgetError& e) {
+    throw BudgetError(origin + ": " + e.what());
   }
-  sw.stop();
-  r.total_seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
+  for (std::size_t i = 0; i < bank.transfer->mode_count(); ++i) {
+    r.poor_fits += bank.transfer->poor(i);
+    r.max_held_out = std::max(r.max_held_out, double(bank.transfer->modes[i].held_out_error));
+  }
+}
 
+// The soundbank's META section: how it was made, for `chladni info` and the batch's stamp.
+std::string metadata(const Soundbank& bank, const std::string& origin, const PrecomputeOptions& o,
+                     const PrecomputeReport& r) {
   nlohmann::json meta;
   meta["generator"] = std::string("chladni ") + kVersion;
   if (!o.batch_stamp.empty()) meta["batch_stamp"] = o.batch_stamp;
@@ -234,7 +190,72 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
     meta["transfer"]["method"] = m == M::Auto ? "auto" : m == M::Bem ? "bem" : "sources";
     meta["transfer"]["bem_modes"] = bem;
   }
-  bank.metadata_json = meta.dump();
+  return meta.dump();
+}
+
+}  // namespace
+
+Soundbank precompute_mesh(const std::string& mesh_path, const PrecomputeOptions& o,
+                          PrecomputeReport& r, const Progress& p) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (p.stage) p.stage("read mesh");
+  SurfaceMesh surface = read_mesh(mesh_path, o.scale);
+  const auto read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  Soundbank bank = precompute_surface(std::move(surface), mesh_path, o, r, p);
+  r.stages.insert(r.stages.begin(), StageTime{"read mesh", read_s});
+  r.total_seconds += read_s;
+  return bank;
+}
+
+Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
+                             const PrecomputeOptions& o, PrecomputeReport& r, const Progress& p) {
+  const auto t_begin = std::chrono::steady_clock::now();
+  validate(o);
+  Stopwatch sw(r, p);
+
+  sw.start("check surface");
+  if (o.repair) {
+    r.repairs = repair_mesh(surface, o.repair_options);
+    if (p.note)
+      for (const auto& line : r.repairs) p.note("repair: " + line);
+  }
+  r.mesh = check_mesh(surface);
+  if (!o.save_surface.empty()) write_obj(o.save_surface, surface);
+  require_valid(r.mesh, origin, o.repair);
+  if (simplify_if_dense(surface, o, r, p, sw) && !o.save_surface.empty())
+    write_obj(o.save_surface, surface);
+
+  EigenOptions eo;
+  eo.modes = o.max_modes;
+  eo.max_frequency = o.max_frequency;
+  eo.mode_cap = o.mode_cap;
+  eo.method = o.eigensolver;
+  eo.max_memory = o.max_memory < 0 ? default_memory_budget() : o.max_memory;
+  SurfaceMesh first;
+  FemPass fp = solve_to_tolerance(surface, o, eo, p, sw, r, first);
+  r.quality = fp.quality;
+  r.tets = fp.tets.tets.size();
+  r.nodes = fp.nodes;
+  r.dofs = fp.dofs;
+  r.nonzeros = fp.nonzeros;
+  r.eigen = std::move(fp.eigen);
+  first = outer_surface(first);  // a hollow body's cavities neither radiate nor get struck
+  const Eigen::MatrixXd shapes = sample_on_surface(fp.tets, r.eigen.vectors, first);
+  surface = std::move(first);
+  r.computed = r.eigen.lambda.size();
+  for (double res : r.eigen.residual) r.max_residual = std::max(r.max_residual, res);
+
+  sw.start("damping and soundbank");
+  Soundbank bank = damped_bank(surface, shapes, fp.errors, origin, o, r);
+  r.eigen.vectors.resize(0, 0);
+  if (o.transfer) {
+    sw.start("transfer");
+    add_transfer(bank, surface, eo.max_memory, origin, o, r, p);
+  }
+  sw.stop();
+  r.total_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
+  bank.metadata_json = metadata(bank, origin, o, r);
   bank.validate();
   return bank;
 }

@@ -241,86 +241,116 @@ TetMesh first_mesh(const SurfaceMesh& surface, const PrecomputeOptions& o, const
   }
 }
 
+// The refinement loop's state: the mesh to solve next, the best solved so far and its worst
+// estimate, and the step the next refinement takes (smaller after one over the memory budget).
+struct Loop {
+  const SurfaceMesh& surface;
+  const PrecomputeOptions& o;
+  const Progress& p;
+  Stopwatch& sw;
+  PrecomputeReport& r;
+  EigenOptions eo;
+  TetOptions topt;
+  TetMesh tets;
+  double meshed = 0;  // the bound `tets` was made with
+  std::optional<FemPass> best;
+  double worst = 0, step = 1;
+
+  // The next mesh from `best`, refined by `step`; false (with r.converged set) when none can be
+  // made.
+  bool refine(double step_now) {
+    sw.start("tetrahedralize");
+    const double aim = std::max(worst, o.tolerance);  // a confirming mesh halves the error
+    if (next_mesh(surface, *best, aim, shrink_factor(aim, step_now, o), o, p, topt, tets, meshed,
+                  r))
+      return true;
+    r.converged = worst <= o.tolerance;
+    return false;
+  }
+};
+
+// After mesh `pass` failed: true to solve a smaller refinement instead, false to stop with the
+// best mesh so far. A refinement over the memory budget is retried at half the step in log size
+// (a factor of 8 in volume becomes 2.8, then 1.7): a thin part may need only a little more. Any
+// other failure leaves the previous mesh standing. Without one, a first mesh over the budget is
+// refused, saying how many modes the band holds (a coarser one would resolve neither the band
+// nor its modes); any other error goes on up.
+bool retry_after(const InputError& e, int pass, Loop& l) {
+  const auto* budget = dynamic_cast<const BudgetError*>(&e);
+  if (!l.best) {
+    if (!budget) throw;
+    refuse_band(*budget, l.eo.expected_modes, l.o);
+  }
+  if (budget && l.step > 0.3) {
+    if (l.p.note)
+      l.p.note("mesh " + std::to_string(pass) + " would exceed --max-memory; trying a smaller " +
+               "refinement step");
+    l.step /= 2;
+    return l.refine(l.step);
+  }
+  // a mesh within the tolerance, only not confirmed, stands as converged
+  l.r.converged = l.worst <= l.o.tolerance;
+  l.r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
+  return false;
+}
+
+// Takes mesh `pass`'s solve as the best: its estimates checked against the previous mesh's, its
+// worst error and its line in the report.
+void record(FemPass f, int pass, double seconds, Loop& l) {
+  const std::size_t raised = l.best ? raise_missed(*l.best, f, l.o) : 0;
+  l.worst = worst_error(f, l.o);
+  if (raised && l.p.note)
+    l.p.note(std::to_string(raised) + " modes moved by more than mesh " + std::to_string(pass - 1) +
+             "'s estimate allowed; their estimates are raised");
+  l.r.passes.push_back(
+      {f.tets.tets.size(), f.dofs, l.worst, seconds, l.meshed, l.eo.expected_modes});
+  if (l.p.note)
+    l.p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
+             " tetrahedra, largest estimated frequency error " + percent(l.worst));
+  // A band search on the next mesh holds what this one found, not the estimate made before
+  // meshing: a finer mesh's frequencies are lower by about the error, so its count is higher
+  // by the cube of that (Weyl). Its memory check then counts the basis the search will fill.
+  if (l.o.max_modes == 0)
+    l.eo.expected_modes =
+        std::size_t(std::ceil(double(f.eigen.lambda.size()) * std::pow(1 + l.worst, 3))) + 1;
+  l.best = std::move(f);
+  l.r.max_tet_volume = l.meshed;
+  l.step = 1;
+}
+
 }  // namespace
 
 FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& o,
                            const EigenOptions& eigen, const Progress& p, Stopwatch& sw,
                            PrecomputeReport& r, SurfaceMesh& first) {
-  EigenOptions eo = eigen;
+  Loop l{surface, o, p, sw, r, eigen, o.tet, {}};
   if (o.max_modes == 0)
-    eo.expected_modes =
+    l.eo.expected_modes =
         std::size_t(std::llround(band_modes(surface, r.mesh, o.material, o.max_frequency)));
   const bool chosen = o.max_tet_volume > 0;
-  TetOptions topt = o.tet;
   sw.start("tetrahedralize");
-  TetMesh tets = first_mesh(surface, o, eo, r, topt);
-  double meshed = topt.max_volume;  // the bound `tets` was made with
-  first.vertices.assign(tets.nodes.begin(),
-                        tets.nodes.begin() + std::ptrdiff_t(tets.surface_vertices));
-  first.triangles = tets.surface_triangles;
-  std::optional<FemPass> best;
-  double worst = 0, step = 1;
+  l.tets = first_mesh(surface, o, l.eo, r, l.topt);
+  l.meshed = l.topt.max_volume;
+  first.vertices.assign(l.tets.nodes.begin(),
+                        l.tets.nodes.begin() + std::ptrdiff_t(l.tets.surface_vertices));
+  first.triangles = l.tets.surface_triangles;
   for (int pass = 1;; ++pass) {
     const auto t0 = std::chrono::steady_clock::now();
     FemPass f;
     try {
-      f = fem_pass(std::move(tets), o, eo, p, sw);
+      f = fem_pass(std::move(l.tets), o, l.eo, p, sw);
     } catch (const InputError& e) {
-      // A refinement over the memory budget is retried at half the step in log size (a factor
-      // of 8 in volume becomes 2.8, then 1.7): a thin part may need only a little more. Any
-      // other failure (a degenerate tetrahedron from TetGen) leaves the previous mesh standing.
-      if (best && dynamic_cast<const BudgetError*>(&e) && step > 0.3) {
-        if (p.note)
-          p.note("mesh " + std::to_string(pass) + " would exceed --max-memory; trying a smaller " +
-                 "refinement step");
-        step /= 2;
-        sw.start("tetrahedralize");
-        const double aim = std::max(worst, o.tolerance);
-        if (!next_mesh(surface, *best, aim, shrink_factor(aim, step, o), o, p, topt, tets, meshed,
-                       r)) {
-          r.converged = worst <= o.tolerance;
-          break;
-        }
-        --pass;
-        continue;
-      }
-      if (best) {  // a mesh within the tolerance, only not confirmed, stands as converged
-        r.converged = worst <= o.tolerance;
-        r.unconverged_reason = std::string("the next refinement failed: ") + e.what();
-        break;
-      }
-      // The first mesh does not fit. A coarser one would resolve neither the band nor the
-      // modes in it, and searching for them all is the work to avoid: refuse now, saying how
-      // many modes the band holds.
-      const auto* budget = dynamic_cast<const BudgetError*>(&e);
-      if (!budget) throw;
-      refuse_band(*budget, eo.expected_modes, o);
+      if (!retry_after(e, pass, l)) break;
+      --pass;
+      continue;
     }
-    const std::size_t raised = best ? raise_missed(*best, f, o) : 0;
-    worst = worst_error(f, o);
-    if (raised && p.note)
-      p.note(std::to_string(raised) + " modes moved by more than mesh " + std::to_string(pass - 1) +
-             "'s estimate allowed; their estimates are raised");
-    r.passes.push_back(
-        {f.tets.tets.size(), f.dofs, worst, seconds_since(t0), meshed, eo.expected_modes});
-    if (p.note)
-      p.note("mesh " + std::to_string(pass) + ": " + std::to_string(f.tets.tets.size()) +
-             " tetrahedra, largest estimated frequency error " + percent(worst));
-    // A band search on the next mesh holds what this one found, not the estimate made before
-    // meshing: a finer mesh's frequencies are lower by about the error, so its count is higher
-    // by the cube of that (Weyl). Its memory check then counts the basis the search will fill.
-    if (o.max_modes == 0)
-      eo.expected_modes =
-          std::size_t(std::ceil(double(f.eigen.lambda.size()) * std::pow(1 + worst, 3))) + 1;
-    best = std::move(f);
-    r.max_tet_volume = meshed;
-    step = 1;
-    const bool confirm = pass == 1 && !chosen && pass < o.max_passes && one_layer(best->tets);
-    if (worst <= o.tolerance && !confirm) {
+    record(std::move(f), pass, seconds_since(t0), l);
+    const bool confirm = pass == 1 && !chosen && pass < o.max_passes && one_layer(l.best->tets);
+    if (l.worst <= o.tolerance && !confirm) {
       r.converged = true;
       break;
     }
-    if (worst <= o.tolerance && p.note)
+    if (l.worst <= o.tolerance && p.note)
       p.note("mesh 1 is one layer of tetrahedra (no vertex inside): a second mesh confirms it");
     r.converged = false;
     if (chosen) {
@@ -331,18 +361,13 @@ FemPass solve_to_tolerance(const SurfaceMesh& surface, const PrecomputeOptions& 
       r.unconverged_reason = std::to_string(pass) + " meshes solved";
       break;
     }
-    sw.start("tetrahedralize");
-    const double aim = std::max(worst, o.tolerance);  // a confirming mesh halves the error
-    if (!next_mesh(surface, *best, aim, shrink_factor(aim, 1, o), o, p, topt, tets, meshed, r)) {
-      r.converged = worst <= o.tolerance;
-      break;
-    }
+    if (!l.refine(1)) break;
   }
   if (!r.converged && p.note)
     p.note("warning: the largest estimated frequency error is " +
            percent(r.passes.back().worst_error) + ", above --tolerance " + percent(o.tolerance) +
            " (" + r.unconverged_reason + ")");
-  return std::move(*best);
+  return std::move(*l.best);
 }
 
 }  // namespace chladni::precompute

@@ -154,44 +154,48 @@ FemMesh make_fem_mesh(const TetMesh& t, int order) {
   return f;
 }
 
-FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kind, int threads,
-                     const std::function<void(double)>& progress) {
-  mat.validate();
-  const int npe = mesh.nodes_per_element();
-  const std::size_t ne = mesh.element_count(), nn = mesh.nodes.size();
-  if (ne == 0) throw InputError("the volume mesh has no elements");
+namespace {
 
-  // Node graph (CSR): sorted neighbours of every node, itself included.
-  std::vector<uint64_t> pairs;
-  pairs.reserve(ne * npe * npe);
-  for (std::size_t e = 0; e < ne; ++e) {
-    const uint32_t* en = &mesh.elements[e * npe];
-    for (int a = 0; a < npe; ++a)
-      for (int b = 0; b < npe; ++b) pairs.push_back(uint64_t(en[b]) << 32 | en[a]);
-  }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
-  std::vector<std::size_t> nptr(nn + 1, 0);
-  std::vector<uint32_t> nbr(pairs.size());
-  for (std::size_t k = 0; k < pairs.size(); ++k) {
-    ++nptr[(pairs[k] >> 32) + 1];
-    nbr[k] = uint32_t(pairs[k]);
-  }
-  std::vector<uint64_t>().swap(pairs);
-  for (std::size_t n = 0; n < nn; ++n) nptr[n + 1] += nptr[n];
-  const std::size_t nnz = 9 * nbr.size();
-  if (nnz > std::size_t(std::numeric_limits<int>::max()))
-    throw InputError("mesh too large: " + std::to_string(nnz) + " matrix entries");
+// The node graph (CSR): sorted neighbours of every node, itself included, and where each node
+// pair's entries sit in K (9 per pair: column 3n + c holds rows 3m + r for m in nbr(n)) and in
+// M, which couples a direction only with itself (m_ab I3, expand_mass) and so stores rows 3m + c
+// only: a third of the memory and of the work of every mass product. `per_pair` (9 or 3) says
+// which; a column holds per_pair / 3 rows per neighbour.
+struct NodeGraph {
+  std::vector<std::size_t> ptr;
+  std::vector<uint32_t> nbr;
 
-  // K: column 3n + c holds rows 3m + r for m in nbr(n), 9 entries per node pair. M couples a
-  // direction only with itself (m_ab I3, expand_mass), so it stores rows 3m + c only: a third of
-  // the memory and of the work of every mass product. `per_pair` (9 or 3) says which; a column
-  // holds per_pair / 3 rows per neighbour.
-  auto column_start = [&](int per_pair, std::size_t n, int c) {
-    return per_pair * nptr[n] + c * (per_pair / 3) * (nptr[n + 1] - nptr[n]);
-  };
-  auto pattern = [&](SparseMatrix& A, int per_pair) {
-    const std::size_t entries = std::size_t(per_pair) * nbr.size();
+  explicit NodeGraph(const FemMesh& mesh) {
+    const int npe = mesh.nodes_per_element();
+    const std::size_t ne = mesh.element_count(), nn = mesh.nodes.size();
+    std::vector<uint64_t> pairs;
+    pairs.reserve(ne * npe * npe);
+    for (std::size_t e = 0; e < ne; ++e) {
+      const uint32_t* en = &mesh.elements[e * npe];
+      for (int a = 0; a < npe; ++a)
+        for (int b = 0; b < npe; ++b) pairs.push_back(uint64_t(en[b]) << 32 | en[a]);
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    ptr.assign(nn + 1, 0);
+    nbr.resize(pairs.size());
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+      ++ptr[(pairs[k] >> 32) + 1];
+      nbr[k] = uint32_t(pairs[k]);
+    }
+    for (std::size_t n = 0; n < nn; ++n) ptr[n + 1] += ptr[n];
+  }
+  std::size_t column_start(int per_pair, std::size_t n, int c) const {
+    return per_pair * ptr[n] + c * (per_pair / 3) * (ptr[n + 1] - ptr[n]);
+  }
+  // Where row_node sits among col_node's sorted neighbours.
+  std::size_t rank(uint32_t row_node, uint32_t col_node) const {
+    const uint32_t* b = &nbr[ptr[col_node]];
+    const uint32_t* e = &nbr[ptr[col_node + 1]];
+    return std::size_t(std::lower_bound(b, e, row_node) - b);
+  }
+  void pattern(SparseMatrix& A, int per_pair) const {
+    const std::size_t nn = ptr.size() - 1, entries = std::size_t(per_pair) * nbr.size();
     A.resize(int(3 * nn), int(3 * nn));
     A.resizeNonZeros(int(entries));
     advise_huge_pages(A.valuePtr(), entries * sizeof(double));
@@ -203,20 +207,83 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
       for (int c = 0; c < 3; ++c) {
         const std::size_t start = column_start(per_pair, n, c);
         outer[3 * n + c] = int(start);
-        for (std::size_t k = nptr[n]; k < nptr[n + 1]; ++k)
+        for (std::size_t k = ptr[n]; k < ptr[n + 1]; ++k)
           for (int r = 0; r < rows; ++r)
-            inner[start + rows * (k - nptr[n]) + r] = int(3 * nbr[k] + (rows == 3 ? r : c));
+            inner[start + rows * (k - ptr[n]) + r] = int(3 * nbr[k] + (rows == 3 ? r : c));
       }
     outer[3 * nn] = int(entries);
-  };
-  // Where row_node sits among col_node's sorted neighbours.
-  auto rank = [&](uint32_t row_node, uint32_t col_node) {
-    const uint32_t* b = &nbr[nptr[col_node]];
-    const uint32_t* e = &nbr[nptr[col_node + 1]];
-    return std::size_t(std::lower_bound(b, e, row_node) - b);
-  };
+  }
+};
 
+// Elements lo..hi of `mesh` added into one worker's values of K (kv) and M (mv), laid out as
+// `g` says.
+void scatter_elements(const FemMesh& mesh, const NodeGraph& g, const Material& mat, std::size_t lo,
+                      std::size_t hi, std::vector<double>& kv, std::vector<double>& mv,
+                      const std::function<void(double)>* progress) {
+  const int npe = mesh.nodes_per_element();
   const double lambda = mat.lame_lambda(), mu = mat.lame_mu(), rho = mat.density;
+  Mat12 K1, M1;
+  Mat30 K2, M2;
+  for (std::size_t e = lo; e < hi; ++e) {
+    const uint32_t* en = &mesh.elements[e * npe];
+    const Vec3 x[4] = {mesh.nodes[en[0]], mesh.nodes[en[1]], mesh.nodes[en[2]], mesh.nodes[en[3]]};
+    const double* Kp;
+    const double* Mp;
+    try {
+      if (npe == 4)
+        p1_element(x, lambda, mu, rho, K1, M1), Kp = K1.data(), Mp = M1.data();
+      else
+        p2_element(x, lambda, mu, rho, K2, M2), Kp = K2.data(), Mp = M2.data();
+    } catch (const InputError& err) {
+      throw InputError("element " + std::to_string(e) + ": " + err.what());
+    }
+    const int ndof = 3 * npe;  // element matrices are column-major
+    for (int b = 0; b < npe; ++b) {
+      std::size_t at[10];  // each node's rank among node b's neighbours
+      for (int a = 0; a < npe; ++a) at[a] = g.rank(en[a], en[b]);
+      for (int c = 0; c < 3; ++c) {
+        const int col = 3 * b + c;
+        const std::size_t k0 = g.column_start(9, en[b], c), m0 = g.column_start(3, en[b], c);
+        for (int a = 0; a < npe; ++a) {
+          for (int r = 0; r < 3; ++r) kv[k0 + 3 * at[a] + r] += Kp[col * ndof + 3 * a + r];
+          mv[m0 + at[a]] += Mp[col * ndof + 3 * a + c];
+        }
+      }
+    }
+    if (progress && *progress && (e - lo) % 4096 == 0)
+      (*progress)(double(e - lo) / double(hi - lo));
+  }
+}
+
+// HRZ lumping: keep the diagonal, scaled so that each direction keeps the total mass (row sums
+// would give P2 corners negative mass).
+void hrz_lump(SparseMatrix& M) {
+  double total = 0, diag = 0;
+  for (int col = 0; col < M.outerSize(); ++col)
+    for (SparseMatrix::InnerIterator it(M, col); it; ++it) {
+      total += it.value();
+      if (it.row() == col) diag += it.value();
+    }
+  const double s = total / diag;
+  for (int col = 0; col < M.outerSize(); ++col)
+    for (SparseMatrix::InnerIterator it(M, col); it; ++it)
+      it.valueRef() = it.row() == col ? it.value() * s : 0.0;
+  M.prune([](Eigen::Index row, Eigen::Index col, double) { return row == col; });
+}
+
+}  // namespace
+
+FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kind, int threads,
+                     const std::function<void(double)>& progress) {
+  mat.validate();
+  const std::size_t ne = mesh.element_count();
+  if (ne == 0) throw InputError("the volume mesh has no elements");
+  const NodeGraph g(mesh);
+  const std::size_t nnz = 9 * g.nbr.size();
+  if (nnz > std::size_t(std::numeric_limits<int>::max()))
+    throw InputError("mesh too large: " + std::to_string(nnz) + " matrix entries");
+
+  // Each worker adds its share of the elements into its own copy of the values.
   const int nt = std::max(1, threads > 0 ? threads : int(std::thread::hardware_concurrency()));
   std::vector<std::vector<double>> kv(nt), mv(nt);
   std::exception_ptr error;
@@ -229,38 +296,8 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
         advise_huge_pages(v->data(), entries * sizeof(double));
         v->assign(entries, 0.0);
       }
-      Mat12 K1, M1;
-      Mat30 K2, M2;
-      const std::size_t lo = ne * t / nt, hi = ne * (t + 1) / nt;
-      for (std::size_t e = lo; e < hi; ++e) {
-        const uint32_t* en = &mesh.elements[e * npe];
-        const Vec3 x[4] = {mesh.nodes[en[0]], mesh.nodes[en[1]], mesh.nodes[en[2]],
-                           mesh.nodes[en[3]]};
-        const double* Kp;
-        const double* Mp;
-        try {
-          if (npe == 4)
-            p1_element(x, lambda, mu, rho, K1, M1), Kp = K1.data(), Mp = M1.data();
-          else
-            p2_element(x, lambda, mu, rho, K2, M2), Kp = K2.data(), Mp = M2.data();
-        } catch (const InputError& err) {
-          throw InputError("element " + std::to_string(e) + ": " + err.what());
-        }
-        const int ndof = 3 * npe;  // element matrices are column-major
-        for (int b = 0; b < npe; ++b) {
-          std::size_t at[10];  // each node's rank among node b's neighbours
-          for (int a = 0; a < npe; ++a) at[a] = rank(en[a], en[b]);
-          for (int c = 0; c < 3; ++c) {
-            const int col = 3 * b + c;
-            const std::size_t k0 = column_start(9, en[b], c), m0 = column_start(3, en[b], c);
-            for (int a = 0; a < npe; ++a) {
-              for (int r = 0; r < 3; ++r) kv[t][k0 + 3 * at[a] + r] += Kp[col * ndof + 3 * a + r];
-              mv[t][m0 + at[a]] += Mp[col * ndof + 3 * a + c];
-            }
-          }
-        }
-        if (t == 0 && progress && (e - lo) % 4096 == 0) progress(double(e - lo) / double(hi - lo));
-      }
+      scatter_elements(mesh, g, mat, ne * t / nt, ne * (t + 1) / nt, kv[t], mv[t],
+                       t == 0 ? &progress : nullptr);
     } catch (...) {
       std::lock_guard<std::mutex> lock(error_mutex);
       if (!error) error = std::current_exception();
@@ -273,8 +310,8 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   if (error) std::rethrow_exception(error);
 
   FemMatrices out;
-  pattern(out.K, 9);
-  pattern(out.M, 3);
+  g.pattern(out.K, 9);
+  g.pattern(out.M, 3);
   auto sum_workers = [&](const std::vector<std::vector<double>>& parts, SparseMatrix& A) {
     double* v = A.valuePtr();
     for (std::size_t k = 0; k < std::size_t(A.nonZeros()); ++k) {
@@ -285,21 +322,7 @@ FemMatrices assemble(const FemMesh& mesh, const Material& mat, MassKind mass_kin
   };
   sum_workers(kv, out.K);
   sum_workers(mv, out.M);
-  if (mass_kind == MassKind::Lumped) {
-    // HRZ lumping: keep the diagonal, scaled so that each direction keeps the total mass (row
-    // sums would give P2 corners negative mass).
-    double total = 0, diag = 0;
-    for (int col = 0; col < out.M.outerSize(); ++col)
-      for (SparseMatrix::InnerIterator it(out.M, col); it; ++it) {
-        total += it.value();
-        if (it.row() == col) diag += it.value();
-      }
-    const double s = total / diag;
-    for (int col = 0; col < out.M.outerSize(); ++col)
-      for (SparseMatrix::InnerIterator it(out.M, col); it; ++it)
-        it.valueRef() = it.row() == col ? it.value() * s : 0.0;
-    out.M.prune([](Eigen::Index row, Eigen::Index col, double) { return row == col; });
-  }
+  if (mass_kind == MassKind::Lumped) hrz_lump(out.M);
   if (progress) progress(1.0);
   return out;
 }
