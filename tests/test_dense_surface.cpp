@@ -96,4 +96,10 @@ TEST(DenseSurface, CliSaysSimplifiedAndJsonCountsTheInput) {
   const nlohmann::json j = nlohmann::json::parse(std::ifstream(json));
   EXPECT_EQ(j["surface"]["simplified_from"], 2016);
   EXPECT_LE(j["surface"]["triangles"].get<int>(), 1000);
+  // The soundbank says its surface is not the file's.
+  const test::CliResult info = test::run_cli("info " + bank + " --json");
+  ASSERT_EQ(info.code, 0) << info.output;
+  const nlohmann::json meta = nlohmann::json::parse(info.output)["metadata"];
+  EXPECT_EQ(meta["surface_simplified"]["from_triangles"], 2016);
+  EXPECT_EQ(nlohmann::json::parse(info.output)["surface"]["triangles"], j["surface"]["triangles"]);
 }

@@ -177,6 +177,9 @@ std::string metadata(const Soundbank& bank, const std::string& origin, const Pre
   meta["modes_dropped"] = {
       {"overdamped", r.overdamped}, {"below_band", r.below_band}, {"above_band", r.above_band}};
   meta["repairs"] = r.repairs;
+  if (r.simplified_from)  // the bank's surface is not the file's: strikes go by position
+    meta["surface_simplified"] = {{"from_triangles", r.simplified_from},
+                                  {"envelope_m", r.simplify_envelope}};
   if (o.transfer) {
     meta["transfer"] = {{"kernels", r.transfer_kernels},
                         {"order", o.acoustic.order == 0 ? nlohmann::json("auto")
