@@ -201,25 +201,11 @@ std::vector<std::string> MeshReport::problems() const {
   return out;
 }
 
-MeshReport check_mesh(const SurfaceMesh& m) {
-  MeshReport r;
-  r.vertices = m.vertices.size();
-  r.triangles = m.triangles.size();
-  r.bbox_min = {INFINITY, INFINITY, INFINITY};
-  r.bbox_max = {-INFINITY, -INFINITY, -INFINITY};
-  for (const Vec3& v : m.vertices) {
-    if (!is_finite(v)) {
-      ++r.nonfinite_vertices;
-      continue;
-    }
-    for (int k = 0; k < 3; ++k)
-      r.bbox_min[k] = std::min(r.bbox_min[k], v[k]), r.bbox_max[k] = std::max(r.bbox_max[k], v[k]);
-  }
-  if (r.nonfinite_vertices || m.triangles.empty()) return r;
-  const std::vector<Point> pts = to_points(m);
+namespace {
 
-  // Directed edge uses: a manifold, consistently oriented closed surface uses every edge once in
-  // each direction.
+// Degenerate faces, and directed edge uses: a manifold, consistently oriented closed surface
+// uses every edge once in each direction.
+void check_edges(const SurfaceMesh& m, const std::vector<Point>& pts, MeshReport& r) {
   std::map<std::pair<uint32_t, uint32_t>, std::pair<int, int>>
       edges;  // (lo, hi) -> (lo->hi, hi->lo)
   for (std::size_t f = 0; f < m.triangles.size(); ++f) {
@@ -250,9 +236,10 @@ MeshReport check_mesh(const SurfaceMesh& m) {
       note(r.inconsistent_examples, e);
     }
   }
-  classify_pieces(m, r);
+}
 
-  // Vertex fans: the faces around a manifold vertex are connected through edges at that vertex.
+// Vertex fans: the faces around a manifold vertex are connected through edges at that vertex.
+void check_vertex_fans(const SurfaceMesh& m, MeshReport& r) {
   std::vector<std::vector<std::size_t>> around(m.vertices.size());
   for (std::size_t f = 0; f < m.triangles.size(); ++f)
     for (uint32_t v : m.triangles[f]) around[v].push_back(f);
@@ -274,6 +261,31 @@ MeshReport check_mesh(const SurfaceMesh& m) {
       note(r.non_manifold_vertex_examples, v);
     }
   }
+}
+
+}  // namespace
+
+MeshReport check_mesh(const SurfaceMesh& m) {
+  MeshReport r;
+  r.vertices = m.vertices.size();
+  r.triangles = m.triangles.size();
+  r.bbox_min = {INFINITY, INFINITY, INFINITY};
+  r.bbox_max = {-INFINITY, -INFINITY, -INFINITY};
+  for (const Vec3& v : m.vertices) {
+    if (!is_finite(v)) {
+      ++r.nonfinite_vertices;
+      continue;
+    }
+    for (int k = 0; k < 3; ++k)
+      r.bbox_min[k] = std::min(r.bbox_min[k], v[k]), r.bbox_max[k] = std::max(r.bbox_max[k], v[k]);
+  }
+  if (r.nonfinite_vertices || m.triangles.empty()) return r;
+  const std::vector<Point> pts = to_points(m);
+
+  check_edges(m, pts, r);
+  classify_pieces(m, r);
+
+  check_vertex_fans(m, r);
 
   // Self-intersections need a halfedge structure: only when the soup is a valid polygon mesh.
   const auto polys = to_polygons(m);
@@ -302,6 +314,68 @@ void require_valid(const MeshReport& report, const std::string& origin, bool aft
   throw InputError(msg);
 }
 
+namespace {
+
+// Fills holes bounded by at most `max_edges` edges (one representative halfedge per cycle).
+template <class Say>
+void fill_holes(Mesh& mesh, std::size_t max_edges, Say say) {
+  std::vector<Mesh::Halfedge_index> borders;
+  PMP::extract_boundary_cycles(mesh, std::back_inserter(borders));
+  std::size_t filled = 0, left = 0, hole_faces = 0;
+  for (auto h : borders) {
+    std::size_t len = 0;
+    for (auto hh : CGAL::halfedges_around_face(h, mesh)) (void)hh, ++len;
+    if (len > max_edges) {
+      ++left;
+      continue;
+    }
+    std::vector<Mesh::Face_index> added;
+    PMP::triangulate_and_refine_hole(mesh, h, std::back_inserter(added), CGAL::Emptyset_iterator());
+    hole_faces += added.size();
+    ++filled;
+  }
+  if (filled)
+    say("filled " + std::to_string(filled) + " holes with " + std::to_string(hole_faces) +
+        " triangles");
+  if (left)
+    say("left " + std::to_string(left) + " holes larger than " + std::to_string(max_edges) +
+        " edges open");
+}
+
+// Needle and sliver triangles (typical after hole filling and self-intersection removal) force
+// sliver tetrahedra; the surface is remeshed isotropically at its mean edge length when any are
+// left.
+template <class Say>
+void remesh_slivers(Mesh& mesh, double min_angle_deg, Say say) {
+  double min_angle = 180, edge_sum = 0;
+  for (auto f : mesh.faces()) {
+    Point p[3];
+    int k = 0;
+    for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) p[k++] = mesh.point(v);
+    for (int c = 0; c < 3; ++c) {
+      const auto u = p[(c + 1) % 3] - p[c], w = p[(c + 2) % 3] - p[c];
+      const double cosang = u * w / std::sqrt(u.squared_length() * w.squared_length());
+      min_angle = std::min(min_angle, std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / M_PI);
+      edge_sum += std::sqrt(u.squared_length());
+    }
+  }
+  if (min_angle < min_angle_deg && CGAL::is_closed(mesh)) {
+    const double target = edge_sum / (3.0 * mesh.number_of_faces());
+    const std::size_t before = mesh.number_of_faces();
+    PMP::isotropic_remeshing(faces(mesh), target, mesh, CGAL::parameters::number_of_iterations(3));
+    mesh.collect_garbage();
+    char buf[160];
+    std::snprintf(
+        buf, sizeof buf,
+        "remeshed the surface isotropically (smallest angle %.2f deg; edge %.3g m): %zu -> "
+        "%zu triangles",
+        min_angle, target, before, std::size_t(mesh.number_of_faces()));
+    say(buf);
+  }
+}
+
+}  // namespace
+
 std::vector<std::string> repair_mesh(SurfaceMesh& m, const RepairOptions& options) {
   std::vector<std::string> log;
   auto say = [&](const std::string& s) { log.push_back(s); };
@@ -329,28 +403,7 @@ std::vector<std::string> repair_mesh(SurfaceMesh& m, const RepairOptions& option
   if (mesh.number_of_faces() != faces_before)
     say("removed " + std::to_string(faces_before - mesh.number_of_faces()) + " degenerate faces");
 
-  // Fill holes bounded by at most max_hole_edges edges (one representative halfedge per cycle).
-  std::vector<Mesh::Halfedge_index> borders;
-  PMP::extract_boundary_cycles(mesh, std::back_inserter(borders));
-  std::size_t filled = 0, left = 0, hole_faces = 0;
-  for (auto h : borders) {
-    std::size_t len = 0;
-    for (auto hh : CGAL::halfedges_around_face(h, mesh)) (void)hh, ++len;
-    if (len > options.max_hole_edges) {
-      ++left;
-      continue;
-    }
-    std::vector<Mesh::Face_index> added;
-    PMP::triangulate_and_refine_hole(mesh, h, std::back_inserter(added), CGAL::Emptyset_iterator());
-    hole_faces += added.size();
-    ++filled;
-  }
-  if (filled)
-    say("filled " + std::to_string(filled) + " holes with " + std::to_string(hole_faces) +
-        " triangles");
-  if (left)
-    say("left " + std::to_string(left) + " holes larger than " +
-        std::to_string(options.max_hole_edges) + " edges open");
+  fill_holes(mesh, options.max_hole_edges, say);
 
   std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
   PMP::self_intersections(mesh, std::back_inserter(pairs));
@@ -363,33 +416,7 @@ std::vector<std::string> repair_mesh(SurfaceMesh& m, const RepairOptions& option
     say("self-intersections: " + std::to_string(pairs.size()) + " face pairs -> " +
         std::to_string(after.size()) + (cleaned ? "" : " (CGAL could not remove them all)"));
   }
-  // Needle and sliver triangles (typical after hole filling and self-intersection removal) force
-  // sliver tetrahedra; remesh the surface isotropically at its mean edge length when any are left.
-  double min_angle = 180, edge_sum = 0;
-  for (auto f : mesh.faces()) {
-    Point p[3];
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) p[k++] = mesh.point(v);
-    for (int c = 0; c < 3; ++c) {
-      const auto u = p[(c + 1) % 3] - p[c], w = p[(c + 2) % 3] - p[c];
-      const double cosang = u * w / std::sqrt(u.squared_length() * w.squared_length());
-      min_angle = std::min(min_angle, std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / M_PI);
-      edge_sum += std::sqrt(u.squared_length());
-    }
-  }
-  if (min_angle < options.min_angle_deg && CGAL::is_closed(mesh)) {
-    const double target = edge_sum / (3.0 * mesh.number_of_faces());
-    const std::size_t before = mesh.number_of_faces();
-    PMP::isotropic_remeshing(faces(mesh), target, mesh, CGAL::parameters::number_of_iterations(3));
-    mesh.collect_garbage();
-    char buf[160];
-    std::snprintf(
-        buf, sizeof buf,
-        "remeshed the surface isotropically (smallest angle %.2f deg; edge %.3g m): %zu -> "
-        "%zu triangles",
-        min_angle, target, before, std::size_t(mesh.number_of_faces()));
-    say(buf);
-  }
+  remesh_slivers(mesh, options.min_angle_deg, say);
   const bool closed = CGAL::is_closed(mesh);
   m = from_mesh(mesh);
   keep_largest_solid(m, say);
