@@ -119,6 +119,15 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
   centre_ = scale(add(lo, hi), 0.5);
   for (const Vec3& v : mesh.vertices) radius_ = std::max(radius_, std::sqrt(dist2(v, centre_)));
 
+  measure_faces();
+  place_anchors(o);
+  order_collocation(o);
+  pick_held_out(o);
+}
+
+void RadiatingSurface::measure_faces() {
+  const SurfaceMesh& mesh = mesh_;
+  const std::size_t nv = mesh.vertices.size(), nt = mesh.triangles.size();
   face_normal_.resize(nt);
   face_area_.resize(nt);
   centroid_.resize(nt);
@@ -146,9 +155,11 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
     const double len = std::sqrt(dot(n, n));
     n = len > 0 ? scale(n, 1.0 / len) : Vec3{0, 0, 1};
   }
+}
 
+void RadiatingSurface::place_anchors(const AcousticOptions& o) {
   // Source anchors: spread vertices, each with the wall thickness below it.
-  anchors_ = farthest_points(mesh.vertices, o.max_sources, centre_);
+  anchors_ = farthest_points(mesh_.vertices, o.max_sources, centre_);
   anchor_depth_.resize(anchors_.size());
   parallel_for(anchors_.size(), o.threads, [&](std::size_t b, std::size_t e) {
     for (std::size_t i = b; i < e; ++i) {
@@ -161,7 +172,10 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
   std::vector<double> depths = anchor_depth_;
   std::nth_element(depths.begin(), depths.begin() + long(depths.size() / 2), depths.end());
   typical_depth_ = depths[depths.size() / 2];
+}
 
+void RadiatingSurface::order_collocation(const AcousticOptions& o) {
+  const std::size_t nt = mesh_.triangles.size();
   // Collocation: triangles in farthest-point order; at each level the first `count` of them carry
   // the area of the triangles nearest to them (a Voronoi quadrature of the surface).
   const std::size_t top = std::min(nt, o.max_collocation);
@@ -186,7 +200,10 @@ RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOption
     levels_.push_back(std::move(lv));
     if (count == top) break;
   }
+}
 
+void RadiatingSurface::pick_held_out(const AcousticOptions& o) {
+  const std::size_t nt = mesh_.triangles.size();
   // Held-out points: off-centroid points (2/3, 1/6, 1/6) of spread triangles, never collocated.
   const std::size_t nh = std::min(nt, std::max<std::size_t>(o.held_out, 1));
   const std::vector<uint32_t> held_tris =

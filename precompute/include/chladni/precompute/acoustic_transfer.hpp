@@ -98,6 +98,10 @@ class RadiatingSurface {
   NormalVelocity from_mode_shape(const float* shape, double omega) const;
 
  private:
+  void measure_faces();                              // normals, areas, centroids, size
+  void place_anchors(const AcousticOptions& o);      // source anchors and their depths
+  void order_collocation(const AcousticOptions& o);  // collocation levels and weights
+  void pick_held_out(const AcousticOptions& o);
   friend struct SourceFitter;
   SurfaceMesh mesh_;
   Vec3 centre_{0, 0, 0};
