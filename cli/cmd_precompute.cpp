@@ -117,11 +117,8 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
   return j;
 }
 
-void run_precompute(const PrecomputeArgs& a) {
-  // Every output is checked before the work (minutes, sometimes) that fills it.
-  check_output_path(a.output, "soundbank");
-  if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
-  if (!a.save_surface.empty()) check_output_path(a.save_surface, "--save-surface");
+// The pipeline's options from the command line's.
+precompute::PrecomputeOptions precompute_options(const PrecomputeArgs& a) {
   precompute::PrecomputeOptions o;
   o.scale = precompute::unit_scale(a.unit) * a.scale;
   o.repair = a.repair;
@@ -167,19 +164,12 @@ void run_precompute(const PrecomputeArgs& a) {
   else if (a.eigensolver != "block")
     throw InputError("--eigensolver must be block or spectra");
 
-  ProgressBar bar(a.quiet);
-  precompute::Progress p;
-  p.stage = [&](const std::string& s) { bar.stage(s); };
-  p.fraction = [&](double f) { bar.fraction(f); };
-  p.note = [&](const std::string& s) { bar.note(s); };
-  precompute::PrecomputeReport r;
-  const Soundbank bank = precompute::precompute_mesh(a.mesh, o, r, p);
-  bar.finish();
-  write_soundbank(a.output, bank);
+  return o;
+}
 
-  if (!a.json_path.empty())
-    write_file_atomic(a.json_path, summary_json(a, r, bank).dump(2) + "\n", "--json");
-  if (a.quiet) return;
+// The summary a terminal run ends with.
+void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& r,
+                   const Soundbank& bank) {
   std::printf("mesh %s: %zu vertices, %zu triangles, volume %.4g m^3", a.mesh.c_str(),
               r.mesh.vertices, r.mesh.triangles, r.mesh.volume);
   if (r.simplified_from)
@@ -231,12 +221,29 @@ void run_precompute(const PrecomputeArgs& a) {
   std::printf(" total %.2f s\nwrote %s\n", r.total_seconds, a.output.c_str());
 }
 
-}  // namespace
+void run_precompute(const PrecomputeArgs& a) {
+  // Every output is checked before the work (minutes, sometimes) that fills it.
+  check_output_path(a.output, "soundbank");
+  if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
+  if (!a.save_surface.empty()) check_output_path(a.save_surface, "--save-surface");
+  const precompute::PrecomputeOptions o = precompute_options(a);
+  ProgressBar bar(a.quiet);
+  precompute::Progress p;
+  p.stage = [&](const std::string& s) { bar.stage(s); };
+  p.fraction = [&](double f) { bar.fraction(f); };
+  p.note = [&](const std::string& s) { bar.note(s); };
+  precompute::PrecomputeReport r;
+  const Soundbank bank = precompute::precompute_mesh(a.mesh, o, r, p);
+  bar.finish();
+  write_soundbank(a.output, bank);
 
-void add_precompute(CLI::App& app, bool run) {
-  auto a = std::make_shared<PrecomputeArgs>();
-  CLI::App* cmd =
-      app.add_subcommand("precompute", "Mesh (OBJ/OFF/PLY/STL) to modal soundbank (.chbank)");
+  if (!a.json_path.empty())
+    write_file_atomic(a.json_path, summary_json(a, r, bank).dump(2) + "\n", "--json");
+  if (!a.quiet) print_summary(a, r, bank);
+}
+
+// The mesh, its units, the material and the elements.
+void add_input_options(CLI::App* cmd, PrecomputeArgs* a) {
   cmd->add_option("mesh", a->mesh, "Closed triangle mesh")->required();
   cmd->add_option("-o,--output", a->output, "Soundbank to write")->required();
   cmd->add_option("--unit", a->unit, "Unit of the mesh coordinates: m, cm, mm")
@@ -259,6 +266,10 @@ void add_precompute(CLI::App& app, bool run) {
       ->check(CLI::Range(1, 2))
       ->capture_default_str();
   cmd->add_option("--mass", a->mass, "Mass matrix: consistent or lumped")->capture_default_str();
+}
+
+// What to compute, how accurately, within what memory; checking and repairing the surface.
+void add_solver_options(CLI::App* cmd, PrecomputeArgs* a) {
   cmd->add_option("--max-modes", a->max_modes,
                   "Compute the first N elastic modes (0: all below --max-freq)")
       ->check(CLI::Range(0, 100000));
@@ -315,6 +326,16 @@ void add_precompute(CLI::App& app, bool run) {
   cmd->add_option("--threads", a->threads, "Assembly threads (0: all cores)")
       ->check(thread_count())
       ->capture_default_str();
+}
+
+}  // namespace
+
+void add_precompute(CLI::App& app, bool run) {
+  auto a = std::make_shared<PrecomputeArgs>();
+  CLI::App* cmd =
+      app.add_subcommand("precompute", "Mesh (OBJ/OFF/PLY/STL) to modal soundbank (.chbank)");
+  add_input_options(cmd, a.get());
+  add_solver_options(cmd, a.get());
   cmd->add_option("--json", a->json_path, "Write a JSON summary (stages, timings, modes)");
   cmd->add_flag("-q,--quiet", a->quiet, "No progress and no summary");
   cmd->add_flag("--no-transfer", a->no_transfer,
