@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "../precompute/src/bem/bem_kernels.hpp"
+#include "../precompute/src/surface/surface_pieces.hpp"
 #include "chladni/core/spherical.hpp"
 #include "chladni/core/transfer.hpp"
 #include "chladni/precompute/bem.hpp"
@@ -59,15 +60,6 @@ TEST(BemQuadrature, SelfTermsAreTheLimitsFromOffTheSurface) {
         << k;
     EXPECT_LT(std::abs(self.hyper - off.hyper), 2e-3 * std::abs(self.hyper)) << k;
   }
-}
-
-// Solid angle of triangle abc seen from x (Van Oosterom & Strackee 1983).
-double solid_angle(const Vec3& x, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 A = sub(a, x), B = sub(b, x), C = sub(c, x);
-  const double la = norm(A), lb = norm(B), lc = norm(C);
-  const double num = dot(A, cross(B, C));
-  const double den = la * lb * lc + dot(A, B) * lc + dot(A, C) * lb + dot(B, C) * la;
-  return 2 * std::atan2(num, den);
 }
 
 TEST(BemQuadrature, NearSingularDoubleLayerIsTheSolidAngle) {

@@ -1,6 +1,5 @@
 #include "local_thickness.hpp"
 
-#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/mesh_segmentation.h>
 
 #include "cgal_surface.hpp"
@@ -9,7 +8,6 @@ namespace chladni::precompute {
 
 namespace {
 using cgal_surface::Mesh;
-namespace PMP = CGAL::Polygon_mesh_processing;
 
 // A cone of 0.5 rad rather than CGAL's 2 pi / 3: a wall's rays then cross it at most 13 % longer
 // than its normal (4.6 mm for the bowl's 4-6 mm wall, against 5.6 mm); 9 rays give the same
@@ -20,12 +18,8 @@ constexpr std::size_t kRays = 9;
 
 std::vector<double> local_thickness(const SurfaceMesh& surface) {
   std::vector<double> thickness(surface.triangles.size(), 0.0);
-  const auto polygons = cgal_surface::to_polygons(surface);
-  if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) return thickness;
   Mesh mesh;
-  PMP::polygon_soup_to_polygon_mesh(cgal_surface::to_points(surface), polygons, mesh);
-  if (mesh.number_of_faces() != surface.triangles.size() || !CGAL::is_closed(mesh))
-    return thickness;
+  if (!cgal_surface::to_closed_mesh(surface, mesh)) return thickness;
   auto sdf = mesh.add_property_map<Mesh::Face_index, double>("f:sdf", 0.0).first;
   CGAL::sdf_values(mesh, sdf, kConeAngle, kRays, false);
   for (Mesh::Face_index f : mesh.faces())  // faces are created in soup order

@@ -20,6 +20,7 @@
 #include <numeric>
 #include <sstream>
 
+#include "../union_find.hpp"
 #include "cgal_surface.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
@@ -28,32 +29,10 @@
 namespace chladni::precompute {
 namespace {
 
+using cgal_surface::from_mesh, cgal_surface::to_points, cgal_surface::to_polygons;
 using cgal_surface::Kernel, cgal_surface::Mesh, cgal_surface::Point;
-using cgal_surface::to_points, cgal_surface::to_polygons;
 namespace PMP = CGAL::Polygon_mesh_processing;
 constexpr std::size_t kExamples = 5;
-
-struct UnionFind {
-  std::vector<std::size_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0); }
-  std::size_t find(std::size_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::size_t a, std::size_t b) { parent[find(a)] = find(b); }
-};
-
-SurfaceMesh from_mesh(const Mesh& mesh) {
-  std::vector<Point> points;
-  std::vector<std::vector<std::size_t>> polys;
-  PMP::polygon_mesh_to_polygon_soup(mesh, points, polys);
-  SurfaceMesh out;
-  for (const Point& p : points) out.vertices.push_back({p.x(), p.y(), p.z()});
-  for (const auto& poly : polys)
-    for (std::size_t k = 1; k + 1 < poly.size(); ++k)
-      out.triangles.push_back({uint32_t(poly[0]), uint32_t(poly[k]), uint32_t(poly[k + 1])});
-  return out;
-}
 
 template <class T>
 void note(std::vector<T>& examples, const T& item) {

@@ -3,7 +3,6 @@
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
 #include <CGAL/AABB_triangle_primitive.h>
-#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Surface_mesh_simplification/Edge_collapse_visitor_base.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Count_stop_predicate.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/LindstromTurk_cost.h>
@@ -23,7 +22,6 @@ namespace chladni::precompute {
 namespace {
 using cgal_surface::Kernel;
 using cgal_surface::Mesh;
-namespace PMP = CGAL::Polygon_mesh_processing;
 namespace SMS = CGAL::Surface_mesh_simplification;
 using Triangle = Kernel::Triangle_3;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<
@@ -82,6 +80,7 @@ class NearInputFilter {
   const Tree& tree_;
   double e2_;
 };
+
 // Progress as the share of the collapses to the target that are done.
 struct ProgressVisitor : SMS::Edge_collapse_visitor_base<Mesh> {
   const std::function<void(double)>* fraction = nullptr;
@@ -94,11 +93,8 @@ struct ProgressVisitor : SMS::Edge_collapse_visitor_base<Mesh> {
 
 SurfaceMesh simplify_surface(const SurfaceMesh& surface, std::size_t target_triangles,
                              double envelope, const std::function<void(double)>& fraction) {
-  const auto polygons = cgal_surface::to_polygons(surface);
   Mesh mesh;
-  if (PMP::is_polygon_soup_a_polygon_mesh(polygons))
-    PMP::polygon_soup_to_polygon_mesh(cgal_surface::to_points(surface), polygons, mesh);
-  if (mesh.number_of_faces() != surface.triangles.size() || !CGAL::is_closed(mesh))
+  if (!cgal_surface::to_closed_mesh(surface, mesh))
     throw InputError("the surface is not a closed polygon mesh");
   // A closed triangle mesh has 3/2 edges per face.
   SMS::Count_stop_predicate<Mesh> stop(target_triangles * 3 / 2);
@@ -113,15 +109,15 @@ SurfaceMesh simplify_surface(const SurfaceMesh& surface, std::size_t target_tria
   Tree tree(input.begin(), input.end());
   tree.accelerate_distance_queries();
   const NearInputFilter filter(tree, envelope);
-  // Lindstrom-Turk's optional shape term, off by CGAL's default, keeps the triangles near
-  // equilateral: without it a 375k-triangle copy of spot.obj came down to 10k triangles a
-  // twentieth of which had an angle under 12.4 degrees (23 with it), and TetGen made 118,874
-  // tetrahedra of them against 32,535.
   ProgressVisitor visitor;
   visitor.fraction = &fraction;
   visitor.planned = surface.triangles.size() > target_triangles
                         ? (surface.triangles.size() - target_triangles) / 2  // 2 faces each
                         : 1;
+  // Lindstrom-Turk's optional shape term, off by CGAL's default, keeps the triangles near
+  // equilateral: without it a 375k-triangle copy of spot.obj came down to 10k triangles a
+  // twentieth of which had an angle under 12.4 degrees (23 with it), and TetGen made 118,874
+  // tetrahedra of them against 32,535.
   const SMS::internal::LindstromTurk_params params(0.5, 0.5, kShapeWeight);
   SMS::edge_collapse(mesh, stop,
                      CGAL::parameters::get_cost(SMS::LindstromTurk_cost<Mesh>(params))
@@ -129,20 +125,7 @@ SurfaceMesh simplify_surface(const SurfaceMesh& surface, std::size_t target_tria
                          .filter(filter)
                          .visitor(visitor));
   mesh.collect_garbage();
-  SurfaceMesh out;
-  out.vertices.reserve(mesh.number_of_vertices());
-  for (Mesh::Vertex_index v : mesh.vertices()) {
-    const auto& p = mesh.point(v);
-    out.vertices.push_back({p.x(), p.y(), p.z()});
-  }
-  out.triangles.reserve(mesh.number_of_faces());
-  for (Mesh::Face_index f : mesh.faces()) {
-    std::array<uint32_t, 3> t{};
-    int k = 0;
-    for (Mesh::Vertex_index v : mesh.vertices_around_face(mesh.halfedge(f))) t[k++] = v.idx();
-    out.triangles.push_back(t);
-  }
-  return out;
+  return cgal_surface::from_mesh(mesh);
 }
 
 double simplification_envelope(const SurfaceMesh& surface, double tolerance, double share) {

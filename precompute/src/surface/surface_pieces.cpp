@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "../edge_key.hpp"
+#include "../union_find.hpp"
 #include "chladni/core/error.hpp"
 
 namespace chladni::precompute {
@@ -18,20 +19,6 @@ namespace {
 // Nesting compares one point of each piece with every triangle: skipped above this many pairs
 // (a soup of thousands of fragments), where the pieces are then reported as separate.
 constexpr double kMaxNestingPairs = 5e7;
-
-std::size_t find(std::vector<std::size_t>& parent, std::size_t x) {
-  while (parent[x] != x) x = parent[x] = parent[parent[x]];
-  return x;
-}
-
-// Solid angle of triangle abc seen from p (Van Oosterom & Strackee 1983), signed by its winding.
-double solid_angle(const Vec3& p, const Vec3& a0, const Vec3& b0, const Vec3& c0) {
-  const Vec3 a = sub(a0, p), b = sub(b0, p), c = sub(c0, p);
-  const double la = norm(a), lb = norm(b), lc = norm(c);
-  const double num = dot(a, cross(b, c));
-  const double den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
-  return 2 * std::atan2(num, den);
-}
 
 void nest(const SurfaceMesh& m, SurfacePieces& s) {
   const std::size_t n = s.count();
@@ -61,10 +48,17 @@ void nest(const SurfaceMesh& m, SurfacePieces& s) {
 
 }  // namespace
 
+double solid_angle(const Vec3& p, const Vec3& a0, const Vec3& b0, const Vec3& c0) {
+  const Vec3 a = sub(a0, p), b = sub(b0, p), c = sub(c0, p);
+  const double la = norm(a), lb = norm(b), lc = norm(c);
+  const double num = dot(a, cross(b, c));
+  const double den = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+  return 2 * std::atan2(num, den);
+}
+
 SurfacePieces surface_pieces(const SurfaceMesh& m) {
   const std::size_t nt = m.triangles.size();
-  std::vector<std::size_t> parent(nt);
-  std::iota(parent.begin(), parent.end(), std::size_t(0));
+  UnionFind pieces(nt);
   std::unordered_map<std::uint64_t, std::size_t> first;
   first.reserve(3 * nt / 2);
   for (std::size_t f = 0; f < nt; ++f)
@@ -72,13 +66,13 @@ SurfacePieces surface_pieces(const SurfaceMesh& m) {
       const uint32_t a = m.triangles[f][k], b = m.triangles[f][(k + 1) % 3];
       if (a == b) continue;
       auto [it, fresh] = first.emplace(edge_key(a, b), f);
-      if (!fresh) parent[find(parent, f)] = find(parent, it->second);
+      if (!fresh) pieces.unite(f, it->second);
     }
   SurfacePieces s;
   s.of_triangle.resize(nt);
   std::unordered_map<std::size_t, uint32_t> index;
   for (std::size_t f = 0; f < nt; ++f) {
-    auto [it, fresh] = index.emplace(find(parent, f), uint32_t(s.volume.size()));
+    auto [it, fresh] = index.emplace(pieces.find(f), uint32_t(s.volume.size()));
     if (fresh) {
       s.first_triangle.push_back(f);
       s.triangles.push_back(0);

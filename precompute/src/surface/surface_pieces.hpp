@@ -25,6 +25,10 @@ struct SurfacePieces {
   bool is_cavity(std::size_t p) const { return nested() && depth[p] % 2 == 1 && volume[p] < 0; }
 };
 
+/// Solid angle of triangle abc seen from p (Van Oosterom & Strackee 1983), signed by its
+/// winding: 4 pi over a closed surface wound outward around p, 0 outside it.
+double solid_angle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
 /// Pieces joined through shared edges (pieces touching at a vertex only are separate), their
 /// signed volumes and, when pieces × triangles stays small, their nesting by generalized winding
 /// numbers (the surface must not intersect itself for the nesting to mean anything).
