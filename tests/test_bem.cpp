@@ -72,7 +72,8 @@ TEST(BemQuadrature, NearSingularDoubleLayerIsTheSolidAngle) {
     const auto e = precompute::element_integrals(m, 0, x, {0, 0, 1}, 0.0, o);
     // Seen from the normal's side the formula's signed angle is negative; the double layer
     // (r = x - y) is positive there.
-    EXPECT_NEAR(e.dbl.real(), -solid_angle(x, a, b, c) / (4 * kPi), 2e-6) << x[0] << " " << x[2];
+    EXPECT_NEAR(e.dbl.real(), -precompute::solid_angle(x, a, b, c) / (4 * kPi), 2e-6)
+        << x[0] << " " << x[2];
   }
 }
 
