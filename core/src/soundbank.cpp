@@ -13,6 +13,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/input_file.hpp"
 #include "chladni/core/output_file.hpp"
+#include "soundbank_sections.hpp"
 
 namespace chladni {
 namespace {
@@ -20,6 +21,7 @@ namespace {
 using binary_io::crc32_of;
 using binary_io::Reader;
 using binary_io::Writer;
+namespace sections = soundbank_sections;
 
 // Layout (docs/soundbank-format.md): 32-byte header, section_count 32-byte table entries, then
 // 8-byte aligned payloads.
@@ -91,63 +93,12 @@ void Soundbank::validate() const {
   }
 }
 
-std::vector<uint8_t> serialize_soundbank(const Soundbank& b) {
-  b.validate();
-  std::vector<std::pair<uint32_t, Writer>> sections;
-  {
-    Writer w;
-    w.u8s(b.metadata_json.data(), b.metadata_json.size());
-    sections.emplace_back(kMeta, std::move(w));
-  }
-  {
-    Writer w;
-    w.le(b.material.youngs_modulus), w.le(b.material.poisson_ratio), w.le(b.material.density);
-    w.le<uint32_t>(static_cast<uint32_t>(b.material.damping.kind));
-    w.le<uint32_t>(static_cast<uint32_t>(b.material.damping.alpha.size()));
-    for (double a : b.material.damping.alpha) w.le(a);
-    w.str(b.material.name);
-    w.str(b.material.source);
-    sections.emplace_back(kMatl, std::move(w));
-  }
-  {
-    Writer w;
-    w.le<uint32_t>(static_cast<uint32_t>(b.omega.size())), w.le<uint32_t>(0);
-    for (std::size_t i = 0; i < b.omega.size(); ++i)
-      w.le(b.omega[i]), w.le(b.decay[i]), w.le(b.residual[i]), w.le<uint32_t>(0);
-    sections.emplace_back(kMode, std::move(w));
-  }
-  {
-    Writer w;
-    w.le<uint32_t>(static_cast<uint32_t>(b.vertices.size()));
-    w.le<uint32_t>(static_cast<uint32_t>(b.triangles.size()));
-    for (const Vec3& v : b.vertices) w.le(v[0]), w.le(v[1]), w.le(v[2]);
-    for (const auto& t : b.triangles) w.le(t[0]), w.le(t[1]), w.le(t[2]);
-    for (const auto& q : b.normals) w.le(q[0]), w.le(q[1]), w.le(q[2]);
-    sections.emplace_back(kSurf, std::move(w));
-  }
-  {
-    Writer w;
-    w.le<uint32_t>(static_cast<uint32_t>(b.omega.size()));
-    w.le<uint32_t>(static_cast<uint32_t>(b.vertices.size()));
-    for (float s : b.shapes) w.le(s);
-    sections.emplace_back(kShap, std::move(w));
-  }
-  if (b.transfer) {
-    const Transfer& t = *b.transfer;
-    Writer w;
-    w.le<uint32_t>(static_cast<uint32_t>(t.modes.size())), w.le<uint32_t>(0);
-    w.le(t.centre[0]), w.le(t.centre[1]), w.le(t.centre[2]);
-    w.le(t.radius), w.le(t.sound_speed), w.le(t.air_density);
-    for (const ModeTransfer& m : t.modes) {
-      w.le(m.wavenumber), w.le(m.order), w.le(m.sources);
-      w.le(m.fit_residual), w.le(m.held_out_error), w.le(m.expansion_error);
-      w.le<uint16_t>(static_cast<uint16_t>(m.method)), w.le<uint16_t>(m.iterations);
-    }
-    w.le<uint64_t>(t.coefficients.size());
-    for (const auto& z : t.coefficients) w.le(z.real()), w.le(z.imag());
-    sections.emplace_back(kXfer, std::move(w));
-  }
+namespace {
 
+using Sections = std::vector<std::pair<uint32_t, Writer>>;
+
+// Header, section table, then the payloads at 8-byte aligned offsets.
+std::vector<uint8_t> frame_sections(const Sections& sections) {
   Writer table;
   uint64_t offset = kHeaderSize + kEntrySize * sections.size();
   std::vector<uint64_t> offsets;
@@ -174,8 +125,10 @@ std::vector<uint8_t> serialize_soundbank(const Soundbank& b) {
   return std::move(out.bytes);
 }
 
-Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& origin) {
-  const std::string who = "soundbank " + origin;
+using Payloads = std::map<uint32_t, std::pair<const uint8_t*, std::size_t>>;
+
+// Checks the header and every checksum; returns each section's payload by tag.
+Payloads unframe_sections(const std::vector<uint8_t>& bytes, const std::string& who) {
   if (bytes.size() < kHeaderSize || std::memcmp(bytes.data(), kMagic, 8) != 0)
     throw InputError(who + ": not a Chladni soundbank (bad magic or shorter than its header)");
   Reader h(bytes.data() + 8, kHeaderSize - 8, who + ": header");
@@ -198,8 +151,7 @@ Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& 
   const uint8_t* table = bytes.data() + kHeaderSize;
   if (crc32_of(table, kEntrySize * count) != table_crc)
     throw InputError(who + ": section table checksum mismatch (file corrupted)");
-
-  std::map<uint32_t, std::pair<const uint8_t*, std::size_t>> found;
+  Payloads found;
   for (uint32_t s = 0; s < count; ++s) {
     Reader e(table + kEntrySize * s, kEntrySize, who + ": section table");
     const auto tag = e.le<uint32_t>();
@@ -214,125 +166,48 @@ Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& 
     if (!found.emplace(tag, std::make_pair(bytes.data() + off, std::size_t(size))).second)
       throw InputError(who + ": " + name + " appears twice");
   }
+  return found;
+}
+
+}  // namespace
+
+std::vector<uint8_t> serialize_soundbank(const Soundbank& b) {
+  b.validate();
+  Writer meta;
+  meta.u8s(b.metadata_json.data(), b.metadata_json.size());
+  Sections list;
+  list.emplace_back(kMeta, std::move(meta));
+  list.emplace_back(kMatl, sections::write_material(b.material));
+  list.emplace_back(kMode, sections::write_modes(b));
+  list.emplace_back(kSurf, sections::write_surface(b));
+  list.emplace_back(kShap, sections::write_shapes(b));
+  if (b.transfer) list.emplace_back(kXfer, sections::write_transfer(*b.transfer));
+  return frame_sections(list);
+}
+
+Soundbank parse_soundbank(const std::vector<uint8_t>& bytes, const std::string& origin) {
+  const std::string who = "soundbank " + origin;
+  const Payloads found = unframe_sections(bytes, who);
   auto section = [&](uint32_t tag) {
     auto it = found.find(tag);
     if (it == found.end())
       throw InputError(who + ": required section '" + tag_name(tag) + "' is missing");
     return Reader(it->second.first, it->second.second, who + ": section '" + tag_name(tag) + "'");
   };
-
   Soundbank b;
-  {
-    auto it = found.find(kMeta);
-    if (it != found.end())
-      b.metadata_json.assign(reinterpret_cast<const char*>(it->second.first), it->second.second);
-  }
-  {
-    Reader r = section(kMatl);
-    b.material.youngs_modulus = r.le<double>();
-    b.material.poisson_ratio = r.le<double>();
-    b.material.density = r.le<double>();
-    const auto kind = r.le<uint32_t>();
-    if (kind > uint32_t(DampingModel::Kind::Hybrid))
-      r.fail("unknown damping model " + std::to_string(kind));
-    b.material.damping.kind = DampingModel::Kind(kind);
-    const auto na = r.le<uint32_t>();
-    r.need_items(na, 8, "damping parameters");
-    b.material.damping.alpha.resize(na);
-    for (double& a : b.material.damping.alpha) a = r.le<double>();
-    b.material.name = r.str(4096);
-    b.material.source = r.str(1 << 16);
-    r.expect_end();
-    try {
-      b.material.validate();
-    } catch (const InputError& e) {
-      r.fail(e.what());
-    }
-  }
-  {
-    Reader r = section(kMode);
-    const auto n = r.le<uint32_t>();
-    r.le<uint32_t>();
-    r.need_items(n, 24, "modes");
-    b.omega.resize(n), b.decay.resize(n), b.residual.resize(n);
-    for (uint32_t i = 0; i < n; ++i) {
-      b.omega[i] = r.le<double>(), b.decay[i] = r.le<double>(), b.residual[i] = r.le<float>();
-      r.le<uint32_t>();
-    }
-    r.expect_end();
-  }
-  {
-    Reader r = section(kSurf);
-    const auto nv = r.le<uint32_t>(), nt = r.le<uint32_t>();
-    r.need_items(uint64_t(nv) * 3, 8, "vertices");
-    b.vertices.resize(nv);
-    for (Vec3& v : b.vertices) v = {r.le<double>(), r.le<double>(), r.le<double>()};
-    r.need_items(uint64_t(nt) * 3, 4, "triangles");
-    b.triangles.resize(nt);
-    for (auto& t : b.triangles) t = {r.le<uint32_t>(), r.le<uint32_t>(), r.le<uint32_t>()};
-    r.need_items(uint64_t(nv) * 3, 4, "normals");
-    b.normals.resize(nv);
-    for (auto& q : b.normals) q = {r.le<float>(), r.le<float>(), r.le<float>()};
-    r.expect_end();
-  }
-  {
-    Reader r = section(kShap);
-    const auto n = r.le<uint32_t>(), nv = r.le<uint32_t>();
-    if (n != b.omega.size() || nv != b.vertices.size())
-      r.fail("holds " + std::to_string(n) + " modes x " + std::to_string(nv) +
-             " vertices, but the bank has " + std::to_string(b.omega.size()) + " modes and " +
-             std::to_string(b.vertices.size()) + " vertices");
-    r.need_items(uint64_t(n) * nv * 3, 4, "shape values");
-    b.shapes.resize(std::size_t(n) * nv * 3);
-    for (float& s : b.shapes) s = r.le<float>();
-    r.expect_end();
-  }
+  if (auto it = found.find(kMeta); it != found.end())
+    b.metadata_json.assign(reinterpret_cast<const char*>(it->second.first), it->second.second);
+  Reader matl = section(kMatl);
+  b.material = sections::read_material(matl);
+  Reader mode = section(kMode);
+  sections::read_modes(mode, b);
+  Reader surf = section(kSurf);
+  sections::read_surface(surf, b);
+  Reader shap = section(kShap);
+  sections::read_shapes(shap, b);
   if (found.count(kXfer)) {
-    Reader r = section(kXfer);
-    Transfer t;
-    const auto n = r.le<uint32_t>();
-    r.le<uint32_t>();
-    if (n != b.omega.size())
-      r.fail("holds " + std::to_string(n) + " modes, but the bank has " +
-             std::to_string(b.omega.size()));
-    t.centre = {r.le<double>(), r.le<double>(), r.le<double>()};
-    t.radius = r.le<double>(), t.sound_speed = r.le<double>(), t.air_density = r.le<double>();
-    r.need_items(n, 40, "mode transfers");
-    uint64_t total = 0;
-    for (uint32_t i = 0; i < n; ++i) {
-      ModeTransfer m;
-      m.wavenumber = r.le<double>();
-      m.order = r.le<uint32_t>(), m.sources = r.le<uint32_t>();
-      m.fit_residual = r.le<float>(), m.held_out_error = r.le<float>();
-      m.expansion_error = r.le<float>();
-      const auto method = r.le<uint16_t>();  // 0 before format 1.2
-      m.iterations = r.le<uint16_t>();
-      if (method > uint16_t(TransferMethod::Bem))
-        r.fail("mode " + std::to_string(i) + " has unknown transfer method " +
-               std::to_string(method));
-      m.method = TransferMethod(method);
-      if (m.order > 200)
-        r.fail("mode " + std::to_string(i) + " has order " + std::to_string(m.order));
-      m.offset = total;
-      total += uint64_t(m.order + 1) * (m.order + 1);
-      t.modes.push_back(m);
-    }
-    const auto nc = r.le<uint64_t>();
-    if (nc != total)
-      r.fail(std::to_string(nc) + " coefficients, but the orders need " + std::to_string(total));
-    r.need_items(nc, 8, "coefficients");
-    t.coefficients.resize(nc);
-    for (auto& z : t.coefficients) {
-      const float re = r.le<float>(), im = r.le<float>();
-      z = {re, im};
-    }
-    r.expect_end();
-    try {
-      t.validate();
-    } catch (const InputError& e) {
-      r.fail(e.what());
-    }
-    b.transfer = std::move(t);
+    Reader xfer = section(kXfer);
+    b.transfer = sections::read_transfer(xfer, b.omega.size());
   }
   try {
     b.validate();
