@@ -86,12 +86,7 @@ std::vector<cd> pattern_velocity(const std::string& spec, const precompute::Surf
   return out;
 }
 
-void run_radiate(const RadiateArgs& a) {
-  if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
-  if (a.velocity.empty() == a.pattern.empty())
-    throw InputError("give exactly one of --velocity FILE and --pattern NAME");
-  if (a.via != "sources" && a.via != "multipole" && a.via != "surface")
-    throw InputError("--via must be surface, sources or multipole");
+precompute::SurfaceMesh read_radiating_mesh(const RadiateArgs& a) {
   const precompute::SurfaceMesh mesh =
       precompute::read_mesh(a.mesh, precompute::unit_scale(a.unit) * a.scale);
   const precompute::MeshReport checked = precompute::check_mesh(mesh);
@@ -99,86 +94,93 @@ void run_radiate(const RadiateArgs& a) {
   if (checked.cavities)  // the air touches the outer piece only
     throw InputError(a.mesh + ": the surface has " + std::to_string(checked.cavities) +
                      " inner pieces (cavities); radiate takes the outer surface alone");
+  return mesh;
+}
 
+std::vector<cd> read_velocity(const RadiateArgs& a, const precompute::SurfaceMesh& mesh) {
+  if (!a.pattern.empty()) return pattern_velocity(a.pattern, mesh);
   std::vector<cd> un;
-  if (!a.pattern.empty()) {
-    un = pattern_velocity(a.pattern, mesh);
-  } else {
-    for (const auto& row : read_number_rows(a.velocity, 1, 2, "velocity file"))
-      un.emplace_back(row[0], row.size() > 1 ? row[1] : 0.0);
-    if (un.size() != mesh.vertices.size())
-      throw InputError(a.velocity + ": " + std::to_string(un.size()) + " velocity values, but " +
-                       a.mesh + " has " + std::to_string(mesh.vertices.size()) + " vertices");
-  }
-  std::vector<Vec3> pts;
-  for (const auto& row : read_number_rows(a.points, 3, 3, "points file"))
-    pts.push_back({row[0], row[1], row[2]});
-  if (pts.empty()) throw InputError(a.points + ": no points");
+  for (const auto& row : read_number_rows(a.velocity, 1, 2, "velocity file"))
+    un.emplace_back(row[0], row.size() > 1 ? row[1] : 0.0);
+  if (un.size() != mesh.vertices.size())
+    throw InputError(a.velocity + ": " + std::to_string(un.size()) + " velocity values, but " +
+                     a.mesh + " has " + std::to_string(mesh.vertices.size()) + " vertices");
+  return un;
+}
 
-  precompute::AcousticOptions o;
-  o.sound_speed = a.sound_speed;
-  o.air_density = a.air_density;
-  o.order = a.order;
-  o.bem_max_memory = precompute::default_memory_budget();  // 80 % of the memory available
-  const precompute::RadiatingSurface surf(mesh, o);
-  // Past a few hundred wavelengths across, no method here resolves the field (BEM elements,
-  // sources and multipole orders are all capped): refuse rather than print a wrong field.
-  const double kR = 2 * std::numbers::pi * a.freq / a.sound_speed * surf.radius();
-  if (!(kR <= 1000))
-    throw InputError(a.mesh + ": k R = " + std::to_string(kR) + " at --freq " +
-                     std::to_string(a.freq) +
-                     " Hz: the surface is too many wavelengths across (at most k R = 1000)");
-  std::shared_ptr<gpu::Context> ctx = a.backend == "gpu" ? transfer_device("gpu") : nullptr;
-  if (a.backend != "gpu" && a.backend != "cpu") throw InputError("--backend must be cpu or gpu");
-  std::unique_ptr<precompute::TransferKernels> kernels =
-      ctx ? precompute::make_gpu_transfer_kernels(ctx) : precompute::make_cpu_transfer_kernels();
-  o.method = parse_transfer_method(a.method, "--method");
+std::vector<Vec3> read_points(const std::string& path) {
+  std::vector<Vec3> pts;
+  for (const auto& row : read_number_rows(path, 3, 3, "points file"))
+    pts.push_back({row[0], row[1], row[2]});
+  if (pts.empty()) throw InputError(path + ": no points");
+  return pts;
+}
+
+struct Radiated {
+  ModeTransfer mt;
+  bool bem = false;
+  std::size_t sources = 0;  // equivalent sources (not BEM)
+  double fit_residual = 0, held_out = 0;
+  std::vector<cd> pressure;  // at the points
+};
+
+// The field at pts by BEM or by equivalent sources (whichever the method asks), read from the
+// surface solution, the sources or their multipole series (--via).
+Radiated radiate(const RadiateArgs& a, const precompute::SurfaceMesh& mesh,
+                 const precompute::RadiatingSurface& surf, const std::vector<cd>& un,
+                 const std::vector<Vec3>& pts, precompute::AcousticOptions o,
+                 const std::shared_ptr<gpu::Context>& ctx, precompute::TransferKernels& kernels) {
   const double k = 2 * std::numbers::pi * a.freq / o.sound_speed;
-  const bool bem =
-      precompute::resolve_method(surf, k, o) == precompute::AcousticOptions::Method::Bem;
+  Radiated r;
+  r.bem = precompute::resolve_method(surf, k, o) == precompute::AcousticOptions::Method::Bem;
   const precompute::NormalVelocity un_of = surf.from_vertex_values(un);
   std::vector<cd> a_lm, surface_p, surface_q;
   precompute::SourceFit fit;
   std::unique_ptr<precompute::BemSurface> elements;
   std::unique_ptr<precompute::BemMesh> bem_mesh;
-  ModeTransfer mt;
-  if (bem) {
+  if (r.bem) {
     // The surface's triangles, split as often as the wavelength asks (within the element cap).
     elements = std::make_unique<precompute::BemSurface>(
         mesh, std::max(0, precompute::bem_level(surf, k, o)));
     bem_mesh = std::make_unique<precompute::BemMesh>(elements->mesh);
     o.bem.gpu = ctx;
     precompute::BemSolver solver(*bem_mesh, o.bem);
-    mt = precompute::bem_transfer(surf, *elements, *bem_mesh, solver, k, un_of, o, a_lm, nullptr,
-                                  &surface_p, &surface_q);
+    r.mt = precompute::bem_transfer(surf, *elements, *bem_mesh, solver, k, un_of, o, a_lm, nullptr,
+                                    &surface_p, &surface_q);
   } else {
-    fit = precompute::fit_sources(surf, k, un_of, o, *kernels);
-    mt = precompute::expand_sources(surf, fit, o, *kernels, a_lm);
+    fit = precompute::fit_sources(surf, k, un_of, o, kernels);
+    r.mt = precompute::expand_sources(surf, fit, o, kernels, a_lm);
+    r.sources = fit.sources.size(), r.fit_residual = fit.residual, r.held_out = fit.held_out;
   }
-  std::vector<cd> p;
   if (a.via == "multipole") {
     Transfer t;
     t.centre = surf.centre();
     t.radius = surf.radius();
-    t.add_mode(mt, a_lm);
-    for (const Vec3& x : pts) p.push_back(t.pressure(0, x));
-  } else if (bem) {
-    p = precompute::bem_field(*bem_mesh, k, surface_p, surface_q, pts, o.bem);
+    t.add_mode(r.mt, a_lm);
+    for (const Vec3& x : pts) r.pressure.push_back(t.pressure(0, x));
+  } else if (r.bem) {
+    r.pressure = precompute::bem_field(*bem_mesh, k, surface_p, surface_q, pts, o.bem);
   } else {
-    p = precompute::source_pressure(surf, fit, pts, *kernels);
+    r.pressure = precompute::source_pressure(surf, fit, pts, kernels);
   }
+  return r;
+}
 
+nlohmann::json radiate_json(const RadiateArgs& a, const precompute::RadiatingSurface& surf,
+                            const Radiated& r, const std::vector<Vec3>& pts,
+                            const std::string& kernels) {
+  const ModeTransfer& mt = r.mt;
   nlohmann::json j;
   j["mesh"] = a.mesh;
   j["frequency_hz"] = a.freq;
-  j["wavenumber"] = k;
+  j["wavenumber"] = 2 * std::numbers::pi * a.freq / a.sound_speed;
   j["method"] = to_string(mt.method);
-  j["kernels"] = kernels->name();
-  j["via"] = a.via == "multipole" ? "multipole" : bem ? "surface" : "sources";
+  j["kernels"] = kernels;
+  j["via"] = a.via == "multipole" ? "multipole" : r.bem ? "surface" : "sources";
   j["fit"] = {{"method", to_string(mt.method)},
-              {bem ? "elements" : "sources", mt.sources},
-              {bem ? "residual" : "fit_residual", mt.fit_residual},
-              {bem ? "null_field_error" : "held_out_error", mt.held_out_error},
+              {r.bem ? "elements" : "sources", mt.sources},
+              {r.bem ? "residual" : "fit_residual", mt.fit_residual},
+              {r.bem ? "null_field_error" : "held_out_error", mt.held_out_error},
               {"iterations", mt.iterations},
               {"order", mt.order},
               {"expansion_error", mt.expansion_error},
@@ -189,26 +191,68 @@ void run_radiate(const RadiateArgs& a) {
     out.push_back({{"x", pts[i][0]},
                    {"y", pts[i][1]},
                    {"z", pts[i][2]},
-                   {"pressure", {{"re", p[i].real()}, {"im", p[i].imag()}}}});
+                   {"pressure", {{"re", r.pressure[i].real()}, {"im", r.pressure[i].imag()}}}});
   j["points"] = out;
-  if (!a.json_path.empty()) write_file_atomic(a.json_path, j.dump(2) + "\n", "--json");
-  if (bem)
+  return j;
+}
+
+void print_radiated(const RadiateArgs& a, double ka, const Radiated& r,
+                    const std::vector<Vec3>& pts, const std::string& kernels) {
+  const ModeTransfer& mt = r.mt;
+  if (r.bem)
     std::printf(
         "%s at %.6g Hz (ka %.3g) by BEM: %u elements, residual %.2e, %u GMRES iterations, "
         "null-field error %.2e, order %u, expansion error %.2e\n",
-        a.mesh.c_str(), a.freq, k * surf.radius(), mt.sources, mt.fit_residual, mt.iterations,
-        mt.held_out_error, mt.order, mt.expansion_error);
+        a.mesh.c_str(), a.freq, ka, mt.sources, mt.fit_residual, mt.iterations, mt.held_out_error,
+        mt.order, mt.expansion_error);
   else
     std::printf(
         "%s at %.6g Hz (ka %.3g) with %s: %zu sources, fit residual %.2e, held-out %.2e, "
         "order %u, expansion error %.2e\n",
-        a.mesh.c_str(), a.freq, k * surf.radius(), kernels->name().c_str(), fit.sources.size(),
-        fit.residual, fit.held_out, mt.order, mt.expansion_error);
+        a.mesh.c_str(), a.freq, ka, kernels.c_str(), r.sources, r.fit_residual, r.held_out,
+        mt.order, mt.expansion_error);
   std::printf("%12s %12s %12s %14s %14s %12s\n", "x", "y", "z", "re p (Pa)", "im p (Pa)",
               "|p| (Pa)");
-  for (std::size_t i = 0; i < pts.size(); ++i)
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const cd p = r.pressure[i];
     std::printf("%12.5g %12.5g %12.5g %14.6g %14.6g %12.6g\n", pts[i][0], pts[i][1], pts[i][2],
-                p[i].real(), p[i].imag(), std::abs(p[i]));
+                p.real(), p.imag(), std::abs(p));
+  }
+}
+
+void run_radiate(const RadiateArgs& a) {
+  if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
+  if (a.velocity.empty() == a.pattern.empty())
+    throw InputError("give exactly one of --velocity FILE and --pattern NAME");
+  if (a.via != "sources" && a.via != "multipole" && a.via != "surface")
+    throw InputError("--via must be surface, sources or multipole");
+  const precompute::SurfaceMesh mesh = read_radiating_mesh(a);
+  const std::vector<cd> un = read_velocity(a, mesh);
+  const std::vector<Vec3> pts = read_points(a.points);
+
+  precompute::AcousticOptions o;
+  o.sound_speed = a.sound_speed;
+  o.air_density = a.air_density;
+  o.order = a.order;
+  o.bem_max_memory = precompute::default_memory_budget();  // 80 % of the memory available
+  const precompute::RadiatingSurface surf(mesh, o);
+  // Past a few hundred wavelengths across, no method here resolves the field (BEM elements,
+  // sources and multipole orders are all capped): refuse rather than print a wrong field.
+  const double ka = 2 * std::numbers::pi * a.freq / a.sound_speed * surf.radius();
+  if (!(ka <= 1000))
+    throw InputError(a.mesh + ": k R = " + std::to_string(ka) + " at --freq " +
+                     std::to_string(a.freq) +
+                     " Hz: the surface is too many wavelengths across (at most k R = 1000)");
+  std::shared_ptr<gpu::Context> ctx = a.backend == "gpu" ? transfer_device("gpu") : nullptr;
+  if (a.backend != "gpu" && a.backend != "cpu") throw InputError("--backend must be cpu or gpu");
+  std::unique_ptr<precompute::TransferKernels> kernels =
+      ctx ? precompute::make_gpu_transfer_kernels(ctx) : precompute::make_cpu_transfer_kernels();
+  o.method = parse_transfer_method(a.method, "--method");
+  const Radiated r = radiate(a, mesh, surf, un, pts, o, ctx, *kernels);
+  if (!a.json_path.empty())
+    write_file_atomic(a.json_path, radiate_json(a, surf, r, pts, kernels->name()).dump(2) + "\n",
+                      "--json");
+  print_radiated(a, ka, r, pts, kernels->name());
 }
 
 }  // namespace
