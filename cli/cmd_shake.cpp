@@ -40,21 +40,12 @@ void list_instruments() {
                 p.title.c_str(), p.source.c_str());
 }
 
-void run_shake(const ShakeArgs& a) {
-  if (a.list) return list_instruments();
-  if (a.instrument.empty()) throw InputError("name an instrument (chladni shake --list)");
-  if (a.output.empty()) throw InputError("-o OUT.wav is required");
-  check_output_path(a.output, "output");
-  if (!a.spectrogram.path.empty()) check_output_path(a.spectrogram.path, "--spectrogram");
-  const runtime::PhisemPreset& preset = runtime::phisem_preset(a.instrument);
-  const SampleFormat format = parse_sample_format(a.format);
-  const double fs = a.sample_rate;
-  const int channels = a.voices > 1 ? 2 : 1;
-
-  // The voices: the instrument's resonances, or the soundbank's modes at the listener.
+// The voices: the instrument's resonances, or the soundbank's modes at the listener.
+std::vector<runtime::ShakerVoice> make_voices(const ShakeArgs& a,
+                                              const runtime::PhisemPreset& preset, double fs,
+                                              int channels) {
   std::unique_ptr<ModalModel> model;
   runtime::ObjectModes object;
-  std::vector<runtime::ShakerVoice> voices;
   if (!a.bank.empty()) {
     model = std::make_unique<ModalModel>(
         runtime::playable_model(read_soundbank(a.bank), "object", fs, a.bank));
@@ -68,6 +59,7 @@ void run_shake(const ShakeArgs& a) {
     object = runtime::object_modes(*model);
     runtime::gains_at_listener(*model, object, parse_vec3(a.listener, "--listener"));
   }
+  std::vector<runtime::ShakerVoice> voices;
   for (uint32_t v = 0; v < a.voices; ++v) {
     runtime::ShakerVoice sv = a.bank.empty()
                                   ? runtime::instrument_voice(preset, fs, a.particles)
@@ -80,9 +72,13 @@ void run_shake(const ShakeArgs& a) {
     }
     voices.push_back(std::move(sv));
   }
+  return voices;
+}
+
+std::unique_ptr<runtime::Filterbank> make_shake_filterbank(
+    const ShakeArgs& a, int channels, const std::vector<runtime::ShakerVoice>& voices) {
   std::size_t slots = 0;
   for (const auto& v : voices) slots += v.resonances.size();
-
   BackendRequest req;
   req.backend = a.backend;
   req.channels = channels;
@@ -90,7 +86,48 @@ void run_shake(const ShakeArgs& a) {
   req.capacity = static_cast<uint32_t>(std::max<std::size_t>(slots, 64));
   req.max_frames = std::max<uint32_t>(a.block, 256);
   req.max_streams = a.voices;
-  auto fb = make_filterbank(req);
+  return make_filterbank(req);
+}
+
+// The peak before --normalize; a non-finite sample is a bug, not a loud sound.
+double peak_and_normalize(AudioBuffer& audio, double normalize_db) {
+  double peak = 0;
+  for (float x : audio.samples) {
+    if (!std::isfinite(x)) throw InternalError("shake: the synthesis produced a non-finite sample");
+    peak = std::max(peak, double(std::abs(x)));
+  }
+  if (!std::isnan(normalize_db) && peak > 0) {
+    const double g = std::pow(10.0, normalize_db / 20.0) / peak;
+    for (float& x : audio.samples) x = static_cast<float>(x * g);
+  }
+  return peak;
+}
+
+void shake_spectrogram(const ShakeArgs& a, const AudioBuffer& audio,
+                       const std::vector<runtime::TimedShake>& shakes) {
+  plot::Events marks{{}, "shakes"};
+  for (const auto& s : shakes)
+    if (marks.times.empty() || s.time > marks.times.back()) marks.times.push_back(s.time);
+  char title[256];
+  std::snprintf(title, sizeof title, "shake %s: %u voice%s, %.3g shakes/s, energy %.3g%s%s",
+                a.instrument.c_str(), a.voices, a.voices == 1 ? "" : "s", a.rate, a.energy,
+                a.bank.empty() ? "" : ", on ", a.bank.c_str());
+  write_spectrogram(a.spectrogram, audio, title, marks, a.quiet);
+}
+
+void run_shake(const ShakeArgs& a) {
+  if (a.list) return list_instruments();
+  if (a.instrument.empty()) throw InputError("name an instrument (chladni shake --list)");
+  if (a.output.empty()) throw InputError("-o OUT.wav is required");
+  check_output_path(a.output, "output");
+  if (!a.spectrogram.path.empty()) check_output_path(a.spectrogram.path, "--spectrogram");
+  const runtime::PhisemPreset& preset = runtime::phisem_preset(a.instrument);
+  const SampleFormat format = parse_sample_format(a.format);
+  const double fs = a.sample_rate;
+  const int channels = a.voices > 1 ? 2 : 1;
+  const std::vector<runtime::ShakerVoice> voices = make_voices(a, preset, fs, channels);
+
+  auto fb = make_shake_filterbank(a, channels, voices);
   const bool gpu = fb->name().rfind("gpu", 0) == 0;  // make_filterbank may have fallen back
   runtime::ShakerBankOptions bo;
   bo.sample_rate = fs;
@@ -108,16 +145,7 @@ void run_shake(const ShakeArgs& a) {
   const auto t0 = std::chrono::steady_clock::now();
   AudioBuffer audio = runtime::render_shaker(bank, channels, fs, shakes, a.duration, a.block);
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  double peak = 0;
-  for (float x : audio.samples) {
-    if (!std::isfinite(x)) throw InternalError("shake: the synthesis produced a non-finite sample");
-    peak = std::max(peak, double(std::abs(x)));
-  }
-  if (!std::isnan(a.normalize_db) && peak > 0) {
-    const double g = std::pow(10.0, a.normalize_db / 20.0) / peak;
-    for (float& x : audio.samples) x = static_cast<float>(x * g);
-  }
+  const double peak = peak_and_normalize(audio, a.normalize_db);
   write_wav(a.output, audio, format);
   if (!a.quiet) {
     uint64_t collisions = 0;
@@ -131,16 +159,7 @@ void run_shake(const ShakeArgs& a) {
                 wall > 0 ? a.duration / wall : 0.0, peak);
     std::printf("wrote %s\n", a.output.c_str());
   }
-  if (!a.spectrogram.path.empty()) {
-    plot::Events marks{{}, "shakes"};
-    for (const auto& s : shakes)
-      if (marks.times.empty() || s.time > marks.times.back()) marks.times.push_back(s.time);
-    char title[256];
-    std::snprintf(title, sizeof title, "shake %s: %u voice%s, %.3g shakes/s, energy %.3g%s%s",
-                  a.instrument.c_str(), a.voices, a.voices == 1 ? "" : "s", a.rate, a.energy,
-                  a.bank.empty() ? "" : ", on ", a.bank.c_str());
-    write_spectrogram(a.spectrogram, audio, title, marks, a.quiet);
-  }
+  if (!a.spectrogram.path.empty()) shake_spectrogram(a, audio, shakes);
   if (std::isnan(a.normalize_db) && peak > 1.0 && format != SampleFormat::Float32)
     std::fprintf(stderr, "warning: peak %.3g exceeds full scale and was clipped; use --normalize\n",
                  peak);
