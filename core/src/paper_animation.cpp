@@ -240,13 +240,85 @@ void read_paper_frames_binary(const std::string& path, PaperAnimation& anim) {
   r.expect_end();
 }
 
-PaperAnimation load_paper_animation(const std::string& json_path) {
-  const json j = json_reader::read_json_file(json_path, "paper animation");
-  const std::filesystem::path dir = std::filesystem::path(json_path).parent_path();
+namespace {
+
+// "frames": {"binary": FILE} or {"obj": PATTERN, "count": N[, "first": K]}, relative to the JSON.
+void parse_frames(Obj& root, const std::filesystem::path& dir, PaperAnimation& anim) {
   auto resolve = [&](const std::string& p) {
     const std::filesystem::path fp(p);
     return (fp.is_absolute() || dir.empty() ? fp : dir / fp).string();
   };
+  Obj fr(root.get("frames"), root.at("frames"));
+  if (fr.has("binary") == fr.has("obj"))
+    fail(fr.path(), "needs exactly one of 'obj' (a file pattern) or 'binary' (a .chpaper)");
+  if (fr.has("binary")) {
+    read_paper_frames_binary(resolve(fr.string("binary")), anim);
+  } else {
+    const std::string pattern = fr.string("obj");
+    if (pattern.find('#') == std::string::npos)
+      fail(fr.at("obj"), "the pattern needs a run of '#' for the frame number");
+    const long count = fr.integer("count");
+    if (count < 2 || count > 1000000) fail(fr.at("count"), "must lie in [2, 1000000]");
+    const long first = fr.has("first") ? fr.integer("first") : 0;
+    if (first < 0) fail(fr.at("first"), "must be >= 0");
+    std::vector<float> positions;
+    for (long f = 0; f < count; ++f) {
+      const std::string file = resolve(expand_pattern(pattern, uint32_t(first + f)));
+      read_obj_frame(file, uint32_t(f), anim, positions);
+    }
+    anim.positions = std::move(positions);
+  }
+  fr.done();
+}
+
+void parse_anchors(Obj& root, PaperAnimation& anim) {
+  const json& arr = root.array("anchors");
+  for (std::size_t i = 0; i < arr.size(); ++i) {
+    Obj a(arr[i], index_path(root.at("anchors"), i));
+    PaperAnchor an;
+    an.vertices = parse_vertex_list(a.get("vertices"), a.at("vertices"));
+    const json& fr = a.get("frames");
+    if (!fr.is_array() || fr.size() != 2 || !fr[0].is_number_unsigned() ||
+        !fr[1].is_number_unsigned())
+      fail(a.at("frames"), "expected [first, last] frame indices (inclusive)");
+    an.first_frame = fr[0].get<uint32_t>();
+    an.last_frame = fr[1].get<uint32_t>();
+    a.done();
+    anim.anchors.push_back(std::move(an));
+  }
+}
+
+void parse_obstacles(Obj& root, PaperAnimation& anim) {
+  const json& arr = root.array("obstacles");
+  for (std::size_t i = 0; i < arr.size(); ++i) {
+    Obj o(arr[i], index_path(root.at("obstacles"), i));
+    PaperObstacle ob;
+    ob.name = o.has("name") ? o.string("name") : "plane" + std::to_string(i);
+    const std::string type = o.has("type") ? o.string("type") : "plane";
+    if (type != "plane") fail(o.at("type"), "unknown obstacle type '" + type + "' (plane)");
+    ob.point = o.vec3("point");
+    ob.normal = o.unit("normal");
+    if (o.has("friction")) ob.friction = o.string("friction");
+    o.done();
+    anim.obstacles.push_back(std::move(ob));
+  }
+}
+
+void parse_listener(Obj& root, PaperAnimation& anim) {
+  Obj l(root.get("listener"), root.at("listener"));
+  if (l.has("position")) anim.listener.position = l.vec3("position");
+  if (l.has("forward")) anim.listener.forward = l.unit("forward");
+  if (l.has("up")) anim.listener.up = l.unit("up");
+  anim.listener.ear_distance = l.non_negative("ear_distance", anim.listener.ear_distance);
+  if (std::abs(dot(anim.listener.forward, anim.listener.up)) > 0.999)
+    fail(l.path(), "'forward' and 'up' must not be parallel");
+  l.done();
+}
+
+}  // namespace
+
+PaperAnimation load_paper_animation(const std::string& json_path) {
+  const json j = json_reader::read_json_file(json_path, "paper animation");
   PaperAnimation anim;
   try {
     Obj root(j, "$");
@@ -256,61 +328,9 @@ PaperAnimation load_paper_animation(const std::string& json_path) {
            "unsupported version " + std::to_string(version) + " (this build reads 1)");
     anim.frame_rate = root.positive("frame_rate", anim.frame_rate);
     anim.contact_distance = root.positive("contact_distance", anim.contact_distance);
-    {
-      Obj fr(root.get("frames"), root.at("frames"));
-      if (fr.has("binary") == fr.has("obj"))
-        fail(fr.path(), "needs exactly one of 'obj' (a file pattern) or 'binary' (a .chpaper)");
-      if (fr.has("binary")) {
-        const std::string file = resolve(fr.string("binary"));
-        read_paper_frames_binary(file, anim);
-      } else {
-        const std::string pattern = fr.string("obj");
-        if (pattern.find('#') == std::string::npos)
-          fail(fr.at("obj"), "the pattern needs a run of '#' for the frame number");
-        const long count = fr.integer("count");
-        if (count < 2 || count > 1000000) fail(fr.at("count"), "must lie in [2, 1000000]");
-        const long first = fr.has("first") ? fr.integer("first") : 0;
-        if (first < 0) fail(fr.at("first"), "must be >= 0");
-        std::vector<float> positions;
-        for (long f = 0; f < count; ++f) {
-          const std::string file = resolve(expand_pattern(pattern, uint32_t(first + f)));
-          read_obj_frame(file, uint32_t(f), anim, positions);
-        }
-        anim.positions = std::move(positions);
-      }
-      fr.done();
-    }
-    if (root.has("anchors")) {
-      const json& arr = root.array("anchors");
-      for (std::size_t i = 0; i < arr.size(); ++i) {
-        Obj a(arr[i], index_path(root.at("anchors"), i));
-        PaperAnchor an;
-        an.vertices = parse_vertex_list(a.get("vertices"), a.at("vertices"));
-        const json& fr = a.get("frames");
-        if (!fr.is_array() || fr.size() != 2 || !fr[0].is_number_unsigned() ||
-            !fr[1].is_number_unsigned())
-          fail(a.at("frames"), "expected [first, last] frame indices (inclusive)");
-        an.first_frame = fr[0].get<uint32_t>();
-        an.last_frame = fr[1].get<uint32_t>();
-        a.done();
-        anim.anchors.push_back(std::move(an));
-      }
-    }
-    if (root.has("obstacles")) {
-      const json& arr = root.array("obstacles");
-      for (std::size_t i = 0; i < arr.size(); ++i) {
-        Obj o(arr[i], index_path(root.at("obstacles"), i));
-        PaperObstacle ob;
-        ob.name = o.has("name") ? o.string("name") : "plane" + std::to_string(i);
-        const std::string type = o.has("type") ? o.string("type") : "plane";
-        if (type != "plane") fail(o.at("type"), "unknown obstacle type '" + type + "' (plane)");
-        ob.point = o.vec3("point");
-        ob.normal = o.unit("normal");
-        if (o.has("friction")) ob.friction = o.string("friction");
-        o.done();
-        anim.obstacles.push_back(std::move(ob));
-      }
-    }
+    parse_frames(root, std::filesystem::path(json_path).parent_path(), anim);
+    if (root.has("anchors")) parse_anchors(root, anim);
+    if (root.has("obstacles")) parse_obstacles(root, anim);
     if (root.has("description")) anim.description = root.string("description");
     if (root.has("event_frames")) {
       const json& ef = root.array("event_frames");
@@ -320,16 +340,7 @@ PaperAnimation load_paper_animation(const std::string& json_path) {
         anim.event_frames.push_back(ef[i].get<uint32_t>());
       }
     }
-    if (root.has("listener")) {
-      Obj l(root.get("listener"), root.at("listener"));
-      if (l.has("position")) anim.listener.position = l.vec3("position");
-      if (l.has("forward")) anim.listener.forward = l.unit("forward");
-      if (l.has("up")) anim.listener.up = l.unit("up");
-      anim.listener.ear_distance = l.non_negative("ear_distance", anim.listener.ear_distance);
-      if (std::abs(dot(anim.listener.forward, anim.listener.up)) > 0.999)
-        fail(l.path(), "'forward' and 'up' must not be parallel");
-      l.done();
-    }
+    if (root.has("listener")) parse_listener(root, anim);
     root.done();
   } catch (const InputError& e) {
     throw InputError(json_path + ": " + e.what());

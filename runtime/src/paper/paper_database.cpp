@@ -116,6 +116,79 @@ void PaperSoundDb::validate() const {
   }
 }
 
+namespace {
+
+// A recording named at JSON path `path`, relative to the database folder, as mono at its rate.
+std::vector<float> read_recording(const std::string& dir, double sample_rate, const json& name,
+                                  const std::string& path) {
+  if (!name.is_string()) json_reader::fail(path, "expected a file name");
+  const std::string file = (fs::path(dir) / name.get<std::string>()).string();
+  std::error_code missing;
+  const bool there = fs::exists(file, missing);
+  if (missing)
+    json_reader::fail(
+        path, "a file name of " + std::to_string(file.size()) + " bytes: " + missing.message());
+  if (!there) json_reader::fail(path, "file " + file + " does not exist");
+  AudioBuffer a;
+  try {
+    a = read_audio(file);
+  } catch (const InputError& e) {
+    json_reader::fail(path, e.what());
+  }
+  if (a.sample_rate != static_cast<int>(sample_rate))
+    json_reader::fail(path, file + " is at " + std::to_string(a.sample_rate) +
+                                " Hz, the database at " + std::to_string(int(sample_rate)) +
+                                " Hz (resample it)");
+  std::vector<float> mono(a.frames(), 0.0f);
+  for (std::size_t t = 0; t < mono.size(); ++t) {
+    for (int c = 0; c < a.channels; ++c) mono[t] += a.samples[t * a.channels + c];
+    mono[t] /= float(a.channels);
+    if (!std::isfinite(mono[t])) json_reader::fail(path, file + " has a non-finite sample");
+  }
+  if (mono.empty()) json_reader::fail(path, file + " is empty");
+  return mono;
+}
+
+PaperDbEntry parse_entry(Obj& e, const std::string& dir, double sample_rate) {
+  PaperDbEntry entry;
+  if (e.has("constrained")) {
+    const json& c = e.get("constrained");
+    if (!c.is_boolean()) json_reader::fail(e.at("constrained"), "expected true or false");
+    entry.constrained = c.get<bool>();
+  }
+  if (!entry.constrained) {
+    entry.l_r = e.positive("l_r_cm", 0) / 100;
+    entry.l_c = e.positive("l_c_cm", 0) / 100;
+  }
+  if (e.has("crumple")) {
+    const json& clips = e.array("crumple");
+    for (std::size_t c = 0; c < clips.size(); ++c)
+      entry.crumple.push_back(
+          read_recording(dir, sample_rate, clips[c], json_reader::index_path(e.at("crumple"), c)));
+  }
+  if (e.has("friction")) {
+    const json& fr = e.get("friction");
+    if (!fr.is_object()) json_reader::fail(e.at("friction"), "expected {surface: [files]}");
+    for (auto it = fr.begin(); it != fr.end(); ++it) {
+      const std::string path = e.at("friction") + "." + it.key();
+      if (!it.value().is_array()) json_reader::fail(path, "expected an array of files");
+      for (std::size_t c = 0; c < it.value().size(); ++c) {
+        const std::string p = json_reader::index_path(path, c);
+        const std::vector<float> rec = read_recording(dir, sample_rate, it.value()[c], p);
+        try {
+          entry.friction[it.key()].push_back(friction_spectrum(rec));
+        } catch (const InputError& err) {
+          json_reader::fail(p, err.what());
+        }
+      }
+    }
+  }
+  e.done();
+  return entry;
+}
+
+}  // namespace
+
 PaperSoundDb load_paper_database(const std::string& dir) {
   const std::string index = (fs::path(dir) / "paper_db.json").string();
   std::error_code ec;
@@ -136,70 +209,9 @@ PaperSoundDb load_paper_database(const std::string& dir) {
   if (r.has("description")) db.description = r.string("description");
   const json& entries = r.array("entries");
   if (entries.empty()) json_reader::fail(r.at("entries"), "no entries");
-  const auto read = [&](const json& name, const std::string& path) {
-    if (!name.is_string()) json_reader::fail(path, "expected a file name");
-    const std::string file = (fs::path(dir) / name.get<std::string>()).string();
-    std::error_code missing;
-    const bool there = fs::exists(file, missing);
-    if (missing)
-      json_reader::fail(
-          path, "a file name of " + std::to_string(file.size()) + " bytes: " + missing.message());
-    if (!there) json_reader::fail(path, "file " + file + " does not exist");
-    AudioBuffer a;
-    try {
-      a = read_audio(file);
-    } catch (const InputError& e) {
-      json_reader::fail(path, e.what());
-    }
-    if (a.sample_rate != static_cast<int>(db.sample_rate))
-      json_reader::fail(path, file + " is at " + std::to_string(a.sample_rate) +
-                                  " Hz, the database at " + std::to_string(int(db.sample_rate)) +
-                                  " Hz (resample it)");
-    std::vector<float> mono(a.frames(), 0.0f);
-    for (std::size_t t = 0; t < mono.size(); ++t) {
-      for (int c = 0; c < a.channels; ++c) mono[t] += a.samples[t * a.channels + c];
-      mono[t] /= float(a.channels);
-      if (!std::isfinite(mono[t])) json_reader::fail(path, file + " has a non-finite sample");
-    }
-    if (mono.empty()) json_reader::fail(path, file + " is empty");
-    return mono;
-  };
   for (std::size_t i = 0; i < entries.size(); ++i) {
     Obj e(entries[i], json_reader::index_path(r.at("entries"), i));
-    PaperDbEntry entry;
-    if (e.has("constrained")) {
-      const json& c = e.get("constrained");
-      if (!c.is_boolean()) json_reader::fail(e.at("constrained"), "expected true or false");
-      entry.constrained = c.get<bool>();
-    }
-    if (!entry.constrained) {
-      entry.l_r = e.positive("l_r_cm", 0) / 100;
-      entry.l_c = e.positive("l_c_cm", 0) / 100;
-    }
-    if (e.has("crumple")) {
-      const json& clips = e.array("crumple");
-      for (std::size_t c = 0; c < clips.size(); ++c)
-        entry.crumple.push_back(read(clips[c], json_reader::index_path(e.at("crumple"), c)));
-    }
-    if (e.has("friction")) {
-      const json& fr = e.get("friction");
-      if (!fr.is_object()) json_reader::fail(e.at("friction"), "expected {surface: [files]}");
-      for (auto it = fr.begin(); it != fr.end(); ++it) {
-        const std::string path = e.at("friction") + "." + it.key();
-        if (!it.value().is_array()) json_reader::fail(path, "expected an array of files");
-        for (std::size_t c = 0; c < it.value().size(); ++c) {
-          const std::string p = json_reader::index_path(path, c);
-          const std::vector<float> rec = read(it.value()[c], p);
-          try {
-            entry.friction[it.key()].push_back(friction_spectrum(rec));
-          } catch (const InputError& err) {
-            json_reader::fail(p, err.what());
-          }
-        }
-      }
-    }
-    e.done();
-    db.entries.push_back(std::move(entry));
+    db.entries.push_back(parse_entry(e, dir, db.sample_rate));
   }
   r.done();
   try {
