@@ -115,6 +115,27 @@ std::vector<Candidate> candidates(VkInstance instance) {
   return out;
 }
 
+// The device named by `selector` (or CHLADNI_VULKAN_DEVICE): an index or part of a name;
+// without one, the most capable type (discrete before integrated before CPU).
+const Candidate* choose_device(const std::vector<Candidate>& cands, std::string selector) {
+  if (selector.empty())
+    if (const char* env = std::getenv("CHLADNI_VULKAN_DEVICE")) selector = env;
+  if (selector.empty())
+    return &*std::min_element(cands.begin(), cands.end(), [](const auto& a, const auto& b) {
+      return type_rank(a.info.type) < type_rank(b.info.type);
+    });
+  const bool numeric = std::all_of(selector.begin(), selector.end(),
+                                   [](unsigned char c) { return std::isdigit(c); });
+  for (const Candidate& c : cands)
+    if (numeric ? c.info.index == std::stoul(selector)
+                : lower(c.info.name).find(lower(selector)) != std::string::npos)
+      return &c;
+  std::ostringstream os;
+  os << "no Vulkan device matches '" << selector << "' (CHLADNI_VULKAN_DEVICE); devices:";
+  for (const Candidate& c : cands) os << " [" << c.info.index << "] " << c.info.name << ";";
+  throw NoDeviceError(os.str());
+}
+
 }  // namespace
 
 const char* result_name(VkResult r) {
@@ -224,32 +245,7 @@ Context::Context(const ContextOptions& options) {
 
     std::vector<Candidate> cands = candidates(instance_);
     if (cands.empty()) throw NoDeviceError("no Vulkan 1.1 device with a compute queue found");
-    std::string selector = options.device;
-    if (selector.empty()) {
-      if (const char* env = std::getenv("CHLADNI_VULKAN_DEVICE")) selector = env;
-    }
-    const Candidate* chosen = nullptr;
-    if (!selector.empty()) {
-      const bool numeric = std::all_of(selector.begin(), selector.end(),
-                                       [](unsigned char c) { return std::isdigit(c); });
-      for (const Candidate& c : cands) {
-        if (numeric ? c.info.index == std::stoul(selector)
-                    : lower(c.info.name).find(lower(selector)) != std::string::npos) {
-          chosen = &c;
-          break;
-        }
-      }
-      if (!chosen) {
-        std::ostringstream os;
-        os << "no Vulkan device matches '" << selector << "' (CHLADNI_VULKAN_DEVICE); devices:";
-        for (const Candidate& c : cands) os << " [" << c.info.index << "] " << c.info.name << ";";
-        throw NoDeviceError(os.str());
-      }
-    } else {
-      chosen = &*std::min_element(cands.begin(), cands.end(), [](const auto& a, const auto& b) {
-        return type_rank(a.info.type) < type_rank(b.info.type);
-      });
-    }
+    const Candidate* chosen = choose_device(cands, options.device);
     physical_ = chosen->pd;
     info_ = chosen->info;
     vkGetPhysicalDeviceProperties(physical_, &properties_);
