@@ -120,12 +120,9 @@ json directivity_json(const ModalModel& model, const Vec3& centre, double radius
           {"values", packed(values)}};
 }
 
-}  // namespace
-
-std::string report_json(const Soundbank& bank, const ReportOptions& o, ReportSummary* summary) {
-  ModalModel model = to_modal_model(bank, o.bank_path);
-  if (!model.has_geometry() || model.normals.size() != model.points.size())
-    throw InputError(o.bank_path + ": the soundbank has no surface to show");
+// The modes below Nyquist, as many as o.max_modes and the shape budget allow.
+std::vector<std::size_t> modes_to_show(const ModalModel& model, const Soundbank& bank,
+                                       const ReportOptions& o, ReportSummary* summary) {
   const std::size_t by_size = std::max<std::size_t>(
       1, std::size_t(o.max_shape_bytes / (12.0 * double(model.points.size()))));
   const std::size_t limit = std::min(o.max_modes, by_size);
@@ -141,6 +138,37 @@ std::string report_json(const Soundbank& bank, const ReportOptions& o, ReportSum
     summary->modes_shown = kept.size();
     summary->limited_by_size = by_size < o.max_modes && kept.size() == by_size;
   }
+  return kept;
+}
+
+// Mode i of the kept model, which is mode `index` of the bank.
+json mode_json(const ModalModel& model, const Soundbank& bank, std::size_t index, std::size_t i,
+               double gain) {
+  const double w = model.omega[i], d = model.decay[i], wd = model.damped_omega(i);
+  json m = {{"bank_index", index},    {"frequency_hz", wd / kTwoPi},
+            {"omega_d", wd},          {"decay", d},
+            {"damping_ratio", d / w}, {"t60_s", d > 0 ? std::log(1000.0) / d : 0.0},
+            {"gain", gain},           {"residual", bank.residual[index]}};
+  if (bank.transfer) {
+    const ModeTransfer& t = bank.transfer->modes[index];
+    m["transfer"] = {{"method", to_string(t.method)},
+                     {"order", t.order},
+                     {"held_out_error", t.held_out_error},
+                     {"fit_residual", t.fit_residual},
+                     {"iterations", t.iterations},
+                     {"poor", bank.transfer->poor(index)},
+                     {"usable", bank.transfer->usable(index)}};
+  }
+  return m;
+}
+
+}  // namespace
+
+std::string report_json(const Soundbank& bank, const ReportOptions& o, ReportSummary* summary) {
+  ModalModel model = to_modal_model(bank, o.bank_path);
+  if (!model.has_geometry() || model.normals.size() != model.points.size())
+    throw InputError(o.bank_path + ": the soundbank has no surface to show");
+  const std::vector<std::size_t> kept = modes_to_show(model, bank, o, summary);
   keep_modes(model, kept);
 
   Vec3 lo = model.points[0], hi = lo;
@@ -154,30 +182,10 @@ std::string report_json(const Soundbank& bank, const ReportOptions& o, ReportSum
   runtime::ObjectModes object = runtime::object_modes(model);
   runtime::gains_at_listener(model, object, listener);
   json modes = json::array();
+  for (std::size_t i = 0; i < model.mode_count(); ++i)
+    modes.push_back(mode_json(model, bank, kept[i], i, object.modes[i].gain));
   std::vector<float> shapes;
   shapes.reserve(model.shapes.size() * 3);
-  for (std::size_t i = 0; i < model.mode_count(); ++i) {
-    const double w = model.omega[i], d = model.decay[i], wd = model.damped_omega(i);
-    json m = {{"bank_index", kept[i]},
-              {"frequency_hz", wd / kTwoPi},
-              {"omega_d", wd},
-              {"decay", d},
-              {"damping_ratio", d / w},
-              {"t60_s", d > 0 ? std::log(1000.0) / d : 0.0},
-              {"gain", object.modes[i].gain},
-              {"residual", bank.residual[kept[i]]}};
-    if (bank.transfer) {
-      const ModeTransfer& t = bank.transfer->modes[kept[i]];
-      m["transfer"] = {{"method", to_string(t.method)},
-                       {"order", t.order},
-                       {"held_out_error", t.held_out_error},
-                       {"fit_residual", t.fit_residual},
-                       {"iterations", t.iterations},
-                       {"poor", bank.transfer->poor(kept[i])},
-                       {"usable", bank.transfer->usable(kept[i])}};
-    }
-    modes.push_back(std::move(m));
-  }
   for (const Vec3& s : model.shapes)
     for (double x : s) shapes.push_back(float(x));
 
