@@ -112,51 +112,57 @@ void write_wav(const std::string& path, const std::vector<float>& samples, int c
   if (std::fclose(f) != 0) throw std::runtime_error("cannot write " + path);
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
+struct Options {
   std::vector<std::string> banks;
   double seconds = 3;
   bool scrape = true;
   std::string wav = "falling_objects.wav", log_path = "falling_objects.csv";
+};
+
+Options parse_options(int argc, char** argv) {
+  Options o;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--seconds" && i + 1 < argc)
-      seconds = std::stod(argv[++i]);
+      o.seconds = std::stod(argv[++i]);
     else if (a == "--no-scrape")
-      scrape = false;
+      o.scrape = false;
     else if (a == "-o" && i + 1 < argc)
-      wav = argv[++i];
+      o.wav = argv[++i];
     else if (a == "--log" && i + 1 < argc)
-      log_path = argv[++i];
+      o.log_path = argv[++i];
     else
-      banks.push_back(a);
+      o.banks.push_back(a);
   }
-  if (!(seconds > 0 && seconds <= 600)) throw std::runtime_error("--seconds must be in (0, 600]");
+  if (!(o.seconds > 0 && o.seconds <= 600))
+    throw std::runtime_error("--seconds must be in (0, 600]");
+  return o;
+}
 
-  chladni_config config;
-  chladni_config_default(&config);
-  config.threads = 1;
-  chladni_runtime* rt = nullptr;
-  check(chladni_runtime_create(&config, &rt), "create");
-  const double fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1}, ear[3] = {0, -1.2, 0.3};
-  check(chladni_post_listener(rt, 0, ear, fwd, up), "listener");
-
-  // The world: z up, a floor at z = 0.
+// The Bullet world: z up, a floor at z = 0.
+struct World {
   btDefaultCollisionConfiguration collision;
-  btCollisionDispatcher dispatcher(&collision);
+  btCollisionDispatcher dispatcher{&collision};
   btDbvtBroadphase broadphase;
   btSequentialImpulseConstraintSolver solver;
-  btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &collision);
-  world.setGravity(btVector3(0, 0, -9.81f));
-  btStaticPlaneShape floor_shape(btVector3(0, 0, 1), 0);
+  btDiscreteDynamicsWorld world{&dispatcher, &broadphase, &solver, &collision};
+  btStaticPlaneShape floor_shape{btVector3(0, 0, 1), 0};
   btDefaultMotionState floor_motion;
-  btRigidBody floor(btRigidBody::btRigidBodyConstructionInfo(0, &floor_motion, &floor_shape));
-  floor.setRestitution(0.4f);
-  floor.setFriction(0.6f);
-  world.addRigidBody(&floor);
+  btRigidBody floor{btRigidBody::btRigidBodyConstructionInfo(0, &floor_motion, &floor_shape)};
 
-  // Bodies stacked loosely above one another, tilted, so they hit the floor and each other.
+  World() {
+    world.setGravity(btVector3(0, 0, -9.81f));
+    floor.setRestitution(0.4f);
+    floor.setFriction(0.6f);
+    world.addRigidBody(&floor);
+  }
+  ~World() { world.removeRigidBody(&floor); }
+};
+
+// The banks named, or three with inline modes (frequency Hz, decay 1/s, Pa at 1 m per N s), as
+// bodies stacked loosely above one another, tilted, so they hit the floor and each other.
+std::vector<Body> make_bodies(chladni_runtime* rt, const std::vector<std::string>& banks,
+                              World& w) {
   std::vector<chladni_bank*> sounding;
   std::vector<btVector3> halves;
   for (const std::string& path : banks) {
@@ -165,7 +171,7 @@ int main(int argc, char** argv) try {
     sounding.push_back(b);
     halves.emplace_back(0.05f, 0.05f, 0.05f);
   }
-  if (banks.empty()) {  // inline modes: frequency Hz, decay 1/s, Pa at 1 m per N s
+  if (banks.empty()) {
     const double tile[3][3] = {{812, 1960, 3720}, {6, 9, 14}, {2.0, 1.2, 0.6}};
     const double block[3][3] = {{1430, 2980, 5110}, {12, 18, 25}, {1.5, 0.8, 0.4}};
     const double rod[3][3] = {{523, 1441, 2825}, {3, 5, 8}, {2.5, 1.4, 0.7}};
@@ -181,88 +187,124 @@ int main(int argc, char** argv) try {
     const btVector3 at(btScalar(0.04 * k), btScalar(-0.03 * k), btScalar(0.25 + 0.2 * k));
     const btQuaternion q(btVector3(1, 0.3f, 0).normalized(), btScalar(0.4 + 0.5 * k));
     bodies.push_back(make_body(rt, sounding[k], halves[k], at, q));
-    world.addRigidBody(bodies.back().rigid.get());
+    w.world.addRigidBody(bodies.back().rigid.get());
   }
+  return bodies;
+}
 
-  FILE* log = std::fopen(log_path.c_str(), "w");
-  if (!log) throw std::runtime_error("cannot write " + log_path);
+// A lasting contact's sliding speed goes to the bodies it touches (their fastest this step).
+void note_slip(const btPersistentManifold* man, const btManifoldPoint& pt,
+               std::vector<Body>& bodies) {
+  const btVector3 rel = surface_velocity(man->getBody0(), pt.getPositionWorldOnA()) -
+                        surface_velocity(man->getBody1(), pt.getPositionWorldOnB());
+  const btVector3& n = pt.m_normalWorldOnB;
+  const double slip = (rel - n * rel.dot(n)).length();
+  for (Body& b : bodies)
+    if (b.rigid.get() == man->getBody0() || b.rigid.get() == man->getBody1())
+      b.slip = std::max(b.slip, slip);
+}
+
+// A new contact is an impact on each sounding body it touches, in that body's bank frame.
+// Returns how many were posted.
+int post_impacts(chladni_runtime* rt, const btPersistentManifold* man, const btManifoldPoint& pt,
+                 const std::vector<Body>& bodies, double t, uint64_t step, FILE* log) {
+  int posted = 0;
+  for (int side = 0; side < 2; ++side) {
+    const btCollisionObject* o = side == 0 ? man->getBody0() : man->getBody1();
+    const auto it = std::find_if(bodies.begin(), bodies.end(),
+                                 [&](const Body& b) { return b.rigid.get() == o; });
+    if (it == bodies.end()) continue;
+    // The impulse pushes this body away from the other.
+    const btVector3 n = side == 0 ? pt.m_normalWorldOnB : -pt.m_normalWorldOnB;
+    const btMatrix3x3 basis_t = o->getWorldTransform().getBasis().transpose();
+    const btVector3 dir = basis_t * n;
+    const btVector3 local = (side == 0 ? pt.m_localPointA : pt.m_localPointB) + it->centre;
+    chladni_impact im{};
+    im.object = it->object;
+    im.time = t;
+    im.impulse = pt.getAppliedImpulse();
+    im.direction[0] = dir.x(), im.direction[1] = dir.y(), im.direction[2] = dir.z();
+    im.point[0] = local.x(), im.point[1] = local.y(), im.point[2] = local.z();
+    im.vertex = -1;
+    im.contact_time = 0.0005;
+    check(chladni_post_impact(rt, &im), "impact");
+    ++posted;
+    std::fprintf(log, "%llu,%.6f,impact,%u,%.6g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                 static_cast<unsigned long long>(step), t, it->object, im.impulse, local.x(),
+                 local.y(), local.z(), dir.x(), dir.y(), dir.z());
+  }
+  return posted;
+}
+
+// One physics step's contacts: impacts for the new ones, then a scrape for each body sliding.
+// Returns whether any impact was posted.
+bool post_contacts(chladni_runtime* rt, World& w, std::vector<Body>& bodies, bool scrape, double t,
+                   uint64_t step, FILE* log) {
+  bool impact = false;
+  for (int m = 0; m < w.dispatcher.getNumManifolds(); ++m) {
+    const btPersistentManifold* man = w.dispatcher.getManifoldByIndexInternal(m);
+    for (int c = 0; c < man->getNumContacts(); ++c) {
+      const btManifoldPoint& pt = man->getContactPoint(c);
+      if (pt.getLifeTime() > 1 && pt.getAppliedImpulse() > 0) note_slip(man, pt, bodies);
+      if (pt.getLifeTime() == 1 && pt.getAppliedImpulse() >= 1e-4f)
+        impact |= post_impacts(rt, man, pt, bodies, t, step, log) > 0;
+    }
+  }
+  for (Body& b : bodies) {
+    if (scrape && b.slip > kMinSlip) {
+      const double energy = std::min(1.0, b.slip / kFullSlip);
+      check(chladni_post_shake(rt, b.scrape, t, energy), "scrape");
+      std::fprintf(log, "%llu,%.6f,scrape,%u,%.4f,%.4f,,,,,\n",
+                   static_cast<unsigned long long>(step), t, b.object, energy, b.slip);
+    }
+    b.slip = 0;
+  }
+  return impact;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Options opt = parse_options(argc, argv);
+  chladni_config config;
+  chladni_config_default(&config);
+  config.threads = 1;
+  chladni_runtime* rt = nullptr;
+  check(chladni_runtime_create(&config, &rt), "create");
+  const double fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1}, ear[3] = {0, -1.2, 0.3};
+  check(chladni_post_listener(rt, 0, ear, fwd, up), "listener");
+  World w;
+  std::vector<Body> bodies = make_bodies(rt, opt.banks, w);
+
+  FILE* log = std::fopen(opt.log_path.c_str(), "w");
+  if (!log) throw std::runtime_error("cannot write " + opt.log_path);
   // impact: amount is the impulse (N s), the point and normal in the bank's frame;
   // scrape: amount is the shake's energy, x the sliding speed (m/s).
   std::fprintf(log, "frame,time_s,kind,object,amount,x,y,z,nx,ny,nz\n");
   std::vector<float> audio, block(kFramesPerStep * 2);
   double first_impact = -1;
-  const uint64_t steps = static_cast<uint64_t>(seconds / kStep);
+  const uint64_t steps = static_cast<uint64_t>(opt.seconds / kStep);
   for (uint64_t s = 0; s < steps; ++s) {
     const double t = chladni_time(rt);  // the audio clock is the simulation's
-    world.stepSimulation(btScalar(kStep), 0);
+    w.world.stepSimulation(btScalar(kStep), 0);
     for (const Body& b : bodies) post_pose(rt, b, t);
-    // New contacts this step become impacts on each sounding body they touch.
-    for (int m = 0; m < dispatcher.getNumManifolds(); ++m) {
-      const btPersistentManifold* man = dispatcher.getManifoldByIndexInternal(m);
-      for (int c = 0; c < man->getNumContacts(); ++c) {
-        const btManifoldPoint& pt = man->getContactPoint(c);
-        if (pt.getLifeTime() > 1 && pt.getAppliedImpulse() > 0) {  // a lasting contact: sliding?
-          const btVector3 rel = surface_velocity(man->getBody0(), pt.getPositionWorldOnA()) -
-                                surface_velocity(man->getBody1(), pt.getPositionWorldOnB());
-          const btVector3& n = pt.m_normalWorldOnB;
-          const double slip = (rel - n * rel.dot(n)).length();
-          for (Body& b : bodies)
-            if (b.rigid.get() == man->getBody0() || b.rigid.get() == man->getBody1())
-              b.slip = std::max(b.slip, slip);
-        }
-        if (pt.getLifeTime() != 1 || pt.getAppliedImpulse() < 1e-4f) continue;
-        for (int side = 0; side < 2; ++side) {
-          const btCollisionObject* o = side == 0 ? man->getBody0() : man->getBody1();
-          const auto it = std::find_if(bodies.begin(), bodies.end(),
-                                       [&](const Body& b) { return b.rigid.get() == o; });
-          if (it == bodies.end()) continue;
-          // The impulse pushes this body away from the other; in its bank's frame.
-          const btVector3 n = side == 0 ? pt.m_normalWorldOnB : -pt.m_normalWorldOnB;
-          const btMatrix3x3 basis_t = o->getWorldTransform().getBasis().transpose();
-          const btVector3 dir = basis_t * n;
-          const btVector3 local = (side == 0 ? pt.m_localPointA : pt.m_localPointB) + it->centre;
-          chladni_impact im{};
-          im.object = it->object;
-          im.time = t;
-          im.impulse = pt.getAppliedImpulse();
-          im.direction[0] = dir.x(), im.direction[1] = dir.y(), im.direction[2] = dir.z();
-          im.point[0] = local.x(), im.point[1] = local.y(), im.point[2] = local.z();
-          im.vertex = -1;
-          im.contact_time = 0.0005;
-          check(chladni_post_impact(rt, &im), "impact");
-          if (first_impact < 0) first_impact = t;
-          std::fprintf(log, "%llu,%.6f,impact,%u,%.6g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
-                       static_cast<unsigned long long>(s), t, it->object, im.impulse, local.x(),
-                       local.y(), local.z(), dir.x(), dir.y(), dir.z());
-        }
-      }
-    }
-    for (Body& b : bodies) {
-      if (scrape && b.slip > kMinSlip) {
-        const double energy = std::min(1.0, b.slip / kFullSlip);
-        check(chladni_post_shake(rt, b.scrape, t, energy), "scrape");
-        std::fprintf(log, "%llu,%.6f,scrape,%u,%.4f,%.4f,,,,,\n",
-                     static_cast<unsigned long long>(s), t, b.object, energy, b.slip);
-      }
-      b.slip = 0;
-    }
+    if (post_contacts(rt, w, bodies, opt.scrape, t, s, log) && first_impact < 0) first_impact = t;
     check(chladni_render(rt, block.data(), kFramesPerStep), "render");
     audio.insert(audio.end(), block.begin(), block.end());
   }
   std::fclose(log);
-  for (Body& b : bodies) world.removeRigidBody(b.rigid.get());
-  world.removeRigidBody(&floor);
+  for (Body& b : bodies) w.world.removeRigidBody(b.rigid.get());
   double peak = 0;
   for (float x : audio) peak = std::max(peak, double(std::abs(x)));
   std::vector<float> scaled(audio);  // the WAV peaks at -1 dBFS; the log keeps pascals
   for (float& x : scaled) x = static_cast<float>(x * (peak > 0 ? 0.891 / peak : 1.0));
-  write_wav(wav, scaled, 2);
+  write_wav(opt.wav, scaled, 2);
   double first_sound = -1;
   for (std::size_t i = 0; i < audio.size() && first_sound < 0; ++i)
     if (std::abs(audio[i]) > 1e-4 * peak) first_sound = double(i / 2) / kRate;
   std::printf("%zu bodies, %.2f s: first impact at %.6f s, first sound at %.6f s, peak %.3g Pa\n",
-              bodies.size(), seconds, first_impact, first_sound, peak);
-  std::printf("wrote %s and %s\n", wav.c_str(), log_path.c_str());
+              bodies.size(), opt.seconds, first_impact, first_sound, peak);
+  std::printf("wrote %s and %s\n", opt.wav.c_str(), opt.log_path.c_str());
   chladni_runtime_destroy(rt);
   return first_impact >= 0 && peak > 0 ? 0 : 1;
 } catch (const std::exception& e) {
