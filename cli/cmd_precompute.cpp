@@ -187,9 +187,12 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
       "%.2f mean %.2f, min dihedral %.1f deg\n",
       r.tets, a.order, r.nodes, r.dofs, r.max_tet_volume, r.quality.max_radius_edge,
       r.quality.mean_radius_edge, r.quality.min_dihedral_deg);
+  std::string stopped = r.eigen.capped ? " (stopped at --mode-cap before --max-freq)" : "";
+  if (a.max_modes > 0 && r.computed < a.max_modes)
+    stopped = " (of the " + std::to_string(a.max_modes) + " asked for, those below --max-freq)";
   std::printf("eigen-solve (%s): %zu rigid modes removed, %zu elastic modes, max residual %.2g%s\n",
               r.eigen.factorization.c_str(), r.eigen.rigid_removed, r.computed, r.max_residual,
-              r.eigen.capped ? " (stopped at --mode-cap before --max-freq)" : "");
+              stopped.c_str());
   if (!r.passes.empty()) {
     double worst_kept = 0;
     for (double x : r.frequency_error) worst_kept = std::max(worst_kept, x);
@@ -271,7 +274,7 @@ void add_input_options(CLI::App* cmd, PrecomputeArgs* a) {
 // What to compute, how accurately, within what memory; checking and repairing the surface.
 void add_solver_options(CLI::App* cmd, PrecomputeArgs* a) {
   cmd->add_option("--max-modes", a->max_modes,
-                  "Compute the first N elastic modes (0: all below --max-freq)")
+                  "Compute the first N elastic modes below --max-freq (0: all below it)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--max-freq", a->max_freq, "Highest frequency of interest (Hz)")
       ->check(finite_above(0, 1e6))

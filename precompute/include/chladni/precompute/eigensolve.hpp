@@ -13,8 +13,10 @@
 namespace chladni::precompute {
 
 struct EigenOptions {
-  std::size_t modes = 0;         ///< first N elastic modes; 0: all below max_frequency
-  double max_frequency = 20000;  ///< Hz, undamped; used when modes == 0
+  /// First N elastic modes, none above max_frequency (block Lanczos; the other methods may
+  /// return some above it); 0: all below max_frequency.
+  std::size_t modes = 0;
+  double max_frequency = 20000;  ///< Hz, undamped: the top of the band
   std::size_t mode_cap = 2000;   ///< most elastic modes ever computed
   /// With modes == 0: about how many modes lie below max_frequency (Weyl's law; 0: unknown).
   /// The memory check then counts a Lanczos basis that can hold them.

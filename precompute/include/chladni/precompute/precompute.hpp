@@ -22,7 +22,7 @@ struct PrecomputeOptions {
   Material material = find_material("steel");
   int order = 2;  ///< quadratic tets by default: linear ones lock in bending (docs/validation.md)
   MassKind mass = MassKind::Consistent;
-  std::size_t max_modes = 0;  ///< 0: every mode below max_frequency
+  std::size_t max_modes = 0;  ///< the first N below max_frequency; 0: every mode below it
   double max_frequency = 20000;
   double min_frequency = 20;
   double sample_rate = 48000;  ///< damped frequencies above sample_rate / 2 are dropped
