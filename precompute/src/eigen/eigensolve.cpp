@@ -177,8 +177,9 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
 }
 
 // Shift-invert Lanczos over the sparse factor: the lowest eigenpairs of K v = lambda M v, as
-// many as o.modes asks (plus the six rigid ones) or all below o.max_frequency.
-void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOptions& o,
+// many as o.modes asks (plus the six rigid ones) or all below o.max_frequency. Returns whether
+// the band ended before the o.modes asked for.
+bool iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOptions& o,
                      const std::function<void(const std::string&)>& status, EigenResult& r,
                      Eigen::VectorXd& evals, Eigen::MatrixXd& evecs) {
   const Eigen::Index n = K.rows();
@@ -230,6 +231,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
   r.factor_seconds = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
+  bool band_ended = false;
   if (o.method == EigenOptions::Method::BlockLanczos) {
     // The first `nev`, but none above max_frequency: precompute drops those, and where the
     // N-th mode lies far above the band (a bar's 100th at 80 kHz), finding them would cost most
@@ -254,6 +256,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
     r.capped = bl.capped && o.modes == 0;  // N modes asked for: stopping at N is no cap
     evals = (1.0 / bl.theta.array() + sigma).matrix();
     evecs = std::move(bl.Y);
+    band_ended = o.modes > 0 && evals.size() < nev;
   } else {
     for (;;) {
       const Eigen::Index ncv =
@@ -290,6 +293,7 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
 
   // Back to the original problem in one multi-right-hand-side solve.
   op.to_modes(evecs);
+  return band_ended;
 }
 
 }  // namespace
@@ -312,6 +316,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
   EigenResult r;
   Eigen::VectorXd evals;
   Eigen::MatrixXd evecs;
+  bool band_ended = false;
   if (n <= kDenseDofs) {
     const auto t0 = std::chrono::steady_clock::now();
     dense_modes(K, M, evals, evecs);
@@ -319,7 +324,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
     r.solves = 1;
     r.lanczos_seconds = seconds_since(t0);
   } else {
-    iterative_modes(K, M, o, status, r, evals, evecs);
+    band_ended = iterative_modes(K, M, o, status, r, evals, evecs);
   }
 
   // M-orthonormal basis of the rigid motions: Q = R L^-T with L L^T = R^T M R.
@@ -358,7 +363,10 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
                      "edge or a vertex, or slivers from a poor surface)");
   }
   for (Eigen::Index j : elastic) {
-    if (o.modes == 0 && evals(j) > lambda_max) break;
+    if (evals(j) > lambda_max) {  // none above the band, however many were asked for
+      band_ended = true;
+      break;
+    }
     if (o.modes > 0 && r.lambda.size() == o.modes) break;
     if (o.modes == 0 && r.lambda.size() == o.mode_cap) {
       r.capped = true;
@@ -366,7 +374,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
     }
     r.lambda.push_back(evals(j));
   }
-  if (o.modes > 0 && r.lambda.size() < o.modes)
+  if (o.modes > 0 && r.lambda.size() < o.modes && !band_ended)
     throw InputError("asked for " + std::to_string(o.modes) + " modes, but the mesh (" +
                      std::to_string(n) + " degrees of freedom) has only " +
                      std::to_string(r.lambda.size()) +
