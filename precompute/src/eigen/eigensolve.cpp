@@ -48,7 +48,8 @@ double blas_rate() {
 constexpr double kSupernodalEfficiency = 0.25;
 
 // Block Lanczos with full reorthogonalization on C (symmetric, eigenvalues theta > 0), for the
-// largest theta: the `want` largest, or (want = 0) all above theta_min, at most `cap`. Spectra's
+// largest theta: all above theta_min, at most `cap` (the first N asked for, or --mode-cap); about
+// `expect` of them (0: unknown) sizes the first basis. Spectra's
 // Lanczos is single-vector; applying C to blocks of vectors turns the triangular solves and the
 // mass product, which dominate, from matrix-vector into matrix-matrix work (about 4x faster here).
 struct BlockLanczosResult {
@@ -60,13 +61,15 @@ struct BlockLanczosResult {
   bool capped = false;  ///< `cap` pairs found and the band goes on
 };
 
-BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, double theta_min,
-                                 Eigen::Index cap, double tol, Eigen::Index max_dim, Eigen::Index b,
+BlockLanczosResult block_lanczos(const SplitShiftInvert& op, double theta_min, Eigen::Index cap,
+                                 Eigen::Index expect, double tol, Eigen::Index max_dim,
+                                 Eigen::Index b,
                                  const std::function<void(const std::string&)>& status) {
   const Eigen::Index n = op.rows();
   max_dim = std::min<Eigen::Index>(max_dim, n) / b * b;
+  // Room for about four vectors per pair expected from the start: growing the basis copies it.
   Eigen::MatrixXd V(
-      n, std::min<Eigen::Index>(max_dim, std::max<Eigen::Index>(4 * b, 4 * want + 2 * b)));
+      n, std::min<Eigen::Index>(max_dim, std::max<Eigen::Index>(4 * b, 4 * expect + 2 * b)));
   advise_huge_pages(V);
   // T grows with V: max_dim is a memory bound (thousands of columns), not the usual size.
   Eigen::MatrixXd T = Eigen::MatrixXd::Zero(V.cols(), V.cols());
@@ -135,8 +138,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
       const Eigen::VectorXd res = (R * S.bottomRows(b)).colwise().norm();
       Eigen::Index wanted = 0, done = 0;
       for (Eigen::Index i = 0; i < k; ++i) {
-        const bool in = want > 0 ? i < want : theta(i) >= theta_min && i < cap;
-        if (!in) break;
+        if (!(theta(i) >= theta_min && i < cap)) break;
         ++wanted;
         done += res(i) <= tol * theta(i);
       }
@@ -145,17 +147,17 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, Eigen::Index want, 
       // count); and a basis well past the wanted count, so that a multiplet wider than the block
       // has had room to appear.
       const bool bracketed =
-          (want > 0 || wanted == cap || (wanted < k && res(wanted) <= tol * theta(wanted))) &&
+          (wanted == cap || (wanted < k && res(wanted) <= tol * theta(wanted))) &&
           k >= wanted + 2 * b;
       if (status && k >= reported + 8 * b) {
         reported = k;
         status("block Lanczos: " + std::to_string(k) + " vectors, " + std::to_string(done) +
                " of " + std::to_string(wanted) + " wanted modes converged");
       }
-      if ((wanted > 0 && done == wanted && bracketed && (want == 0 || wanted == want)) || full) {
+      if ((wanted > 0 && done == wanted && bracketed) || full) {
         out.converged = done == wanted && bracketed;
         out.done = done;
-        out.capped = want == 0 && wanted == cap && wanted < k && theta(wanted) >= theta_min;
+        out.capped = wanted == cap && wanted < k && theta(wanted) >= theta_min;
         out.theta = theta.head(wanted);
         if (!out.converged) return out;  // refused by the caller: no Ritz vectors needed
         out.Y.resize(n, wanted);
@@ -237,8 +239,9 @@ bool iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
     // N-th mode lies far above the band (a bar's 100th at 80 kHz), finding them would cost most
     // of the solve.
     const double theta_min = 1.0 / (lambda_max - sigma);
-    BlockLanczosResult bl = block_lanczos(op, 0, theta_min, o.modes > 0 ? nev : max_nev,
-                                          o.tolerance, max_dim, o.block, status);
+    BlockLanczosResult bl =
+        block_lanczos(op, theta_min, o.modes > 0 ? nev : max_nev, o.modes > 0 ? nev : 0,
+                      o.tolerance, max_dim, o.block, status);
     r.solves = 1;
     r.operations = bl.applied;
     // Unconverged Ritz pairs would be wrong modes. Where the budget set the basis, this is a
