@@ -2,19 +2,22 @@
 # spot.obj as shipped, 100 modes at the default 1 % tolerance, modes only (mesh2faust's task:
 # 14.5 s in the issue's measurement), run several times because a shared machine's timings
 # spread by 10-30 %. Prints one row per run (stage seconds from --json, minor page faults from
-# /usr/bin/time), then the median, min and max of the totals.
-# Usage: bash bench/spot_bench.sh [path/to/chladni] [runs]   (defaults: build/cli/chladni, 9)
+# /usr/bin/time), then the median, min and max of the totals. Another mesh may be named third
+# (bar.obj against mesh2faust's 2.9 s).
+# Usage: bash bench/spot_bench.sh [path/to/chladni] [runs] [mesh]
+#        (defaults: build/cli/chladni, 9, meshes/spot.obj)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 chladni=${1:-build/cli/chladni}
 runs=${2:-9}
+mesh=${3:-meshes/spot.obj}
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 
 echo "| run | tets | DOFs | assemble (s) | factor (s) | Lanczos (s) | eigen-solve (s) | error estimate (s) | total (s) | worst estimate | minor page faults |"
 echo "|---|---|---|---|---|---|---|---|---|---|---|"
 for ((r = 1; r <= runs; ++r)); do
-  /usr/bin/time -o "$out/time" -f "%R" "$chladni" precompute meshes/spot.obj --material steel \
+  /usr/bin/time -o "$out/time" -f "%R" "$chladni" precompute "$mesh" --material steel \
     --max-modes 100 --no-transfer -q -o "$out/spot.chbank" --json "$out/s.json"
   python3 - "$r" "$out/s.json" "$(tail -n 1 "$out/time")" "$out/totals" <<'PY'
 import json, sys
