@@ -12,6 +12,7 @@
 #include "backend.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
+#include "chladni/precompute/blas_kernels.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "commands.hpp"
 #include "progress.hpp"
@@ -62,6 +63,7 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                       {"mean_radius_edge", r.quality.mean_radius_edge},
                       {"min_dihedral_deg", r.quality.min_dihedral_deg}};
   j["eigen"] = {{"factorization", r.eigen.factorization},
+                {"blas_kernels", precompute::blas_core_name()},
                 {"rigid_removed", r.eigen.rigid_removed},
                 {"rigid_lambda", r.eigen.rigid_lambda},
                 {"computed", r.computed},

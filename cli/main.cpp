@@ -10,8 +10,10 @@
 #include "chladni/core/version.hpp"
 #include "chladni/gpu/context.hpp"
 #include "commands.hpp"
+#include "native_blas.hpp"
 
 int main(int argc, char** argv) {
+  chladni::cli::exec_with_native_blas(argv);
 #if defined(__GLIBC__)
   // The eigen-solve and the factorization allocate and free blocks of tens of MB at every step.
   // glibc's defaults hand such blocks back to the kernel each time (mmap above a threshold,

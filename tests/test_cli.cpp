@@ -339,18 +339,51 @@ TEST(CliPrecompute, NoTransferLeavesXferOut) {
   EXPECT_TRUE(nlohmann::json::parse(r.output)["transfer"].is_null());
 }
 
+namespace {
+
+// bar.obj's first 20 modes with `env` before the command: its --json summary.
+nlohmann::json bar_summary(const std::string& name, const std::string& env) {
+  const std::string json = chladni::test::temp_path(name + ".json");
+  const Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " +
+                           chladni::test::temp_path(name + ".chbank") +
+                           " --max-modes 20 --no-transfer -q --json " + json,
+                       env);
+  EXPECT_EQ(r.code, 0) << r.output;
+  return nlohmann::json::parse(std::ifstream(json));
+}
+
+}  // namespace
+
 // Huge pages are an allocation hint only: with them turned off the modes are the same.
 TEST(CliPrecompute, HugePagesChangeNoMode) {
   std::vector<double> hz[2];
-  for (int off : {0, 1}) {
-    const std::string json = chladni::test::temp_path("chladni_cli_huge.json");
-    const Result r = run("precompute " CHLADNI_SOURCE_DIR "/meshes/bar.obj -o " +
-                             chladni::test::temp_path("chladni_cli_huge.chbank") +
-                             " --max-modes 20 --no-transfer -q --json " + json,
-                         off ? "CHLADNI_HUGE_PAGES=0" : "");
-    ASSERT_EQ(r.code, 0) << r.output;
-    hz[off] =
-        nlohmann::json::parse(std::ifstream(json))["frequencies_hz"].get<std::vector<double>>();
+  for (int off : {0, 1})
+    hz[off] = bar_summary("chladni_cli_huge", off ? "CHLADNI_HUGE_PAGES=0" : "")["frequencies_hz"]
+                  .get<std::vector<double>>();
+  ASSERT_EQ(hz[0].size(), 20u);
+  ASSERT_EQ(hz[1].size(), 20u);
+  for (std::size_t i = 0; i < 20; ++i) EXPECT_NEAR(hz[0][i], hz[1][i], 1e-9 * hz[0][i]) << i;
+}
+
+// Where OpenBLAS does not know the CPU it runs generic SSE3 kernels; the CLI starts again with
+// OPENBLAS_CORETYPE naming the AVX2 or AVX-512 ones. The user's own setting stands, and the
+// kernels change no mode.
+TEST(CliPrecompute, BlasKernelsSuitTheCpuAndChangeNoMode) {
+  std::vector<double> hz[2];
+  std::string kernels[2];
+  for (int forced : {0, 1}) {
+    const nlohmann::json j = bar_summary(
+        "chladni_cli_blas", forced ? "OPENBLAS_CORETYPE=Prescott" : "env -u OPENBLAS_CORETYPE");
+    hz[forced] = j["frequencies_hz"].get<std::vector<double>>();
+    kernels[forced] = j["eigen"]["blas_kernels"].get<std::string>();
+  }
+  if (kernels[1].empty()) GTEST_SKIP() << "the BLAS is not OpenBLAS";
+  EXPECT_EQ(kernels[1], "Prescott");
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) {
+    for (const char* generic : {"Prescott", "Core2", "Nehalem", "Unknown"}) {
+      EXPECT_NE(kernels[0], generic);
+    }
   }
   ASSERT_EQ(hz[0].size(), 20u);
   ASSERT_EQ(hz[1].size(), 20u);
