@@ -49,6 +49,156 @@ double median_ms(F&& fn) {
   return ms[ms.size() / 2];
 }
 
+struct Args {
+  std::string bank, json;
+  std::vector<double> distances;
+  std::size_t gain_modes = 100000;
+};
+
+Args parse_args(int argc, char** argv) {
+  Args a;
+  a.bank = argv[1];
+  std::string distances = "3,10,30";
+  for (int i = 2; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--gain-modes"))
+      a.gain_modes = std::stoul(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--distances"))
+      distances = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--json"))
+      a.json = argv[i + 1];
+  }
+  std::stringstream ds(distances);
+  for (std::string tok; std::getline(ds, tok, ',');) a.distances.push_back(std::stod(tok));
+  return a;
+}
+
+// The same instances with far-field maps and as series only, until `gain_modes` modes.
+struct Tables {
+  runtime::TransferTable maps, series;
+};
+
+void build_tables(const Args& a, const Transfer& t, runtime::ThreadPool& pool, unsigned hw,
+                  Tables& tb, nlohmann::json& j) {
+  tb.series.map_options.reset();
+  const auto t0 = clock_type::now();
+  tb.maps.add(t, &pool);
+  const double build_s = since(t0);
+  tb.series.add(t);
+  while (tb.maps.mode_count() < a.gain_modes) tb.maps.add_instance(0), tb.series.add_instance(0);
+  const runtime::GainMap& m = tb.maps.maps[0];
+  std::vector<float> valid = m.valid_radius;
+  std::sort(valid.begin(), valid.end());
+  const double median_valid = valid[valid.size() / 2] / t.radius;
+  std::string grids;
+  for (const auto& g : m.grids)
+    grids += " " + std::to_string(g.rows) + "x" + std::to_string(g.cols) + ":" +
+             std::to_string(g.modes.size());
+  const double per_mode = double(t.coefficients.size()) / double(t.mode_count());
+  std::printf(
+      "%s: %zu modes per object, R %.3f m; %zu modes in %zu objects, %.0f coefficients per mode\n"
+      "maps: %.1f MB, built in %.2f s (%u threads); grids (rows x cols: modes)%s\n"
+      "  valid radius: median %.1f R, largest %.1f R; %u of %u modes series-only\n",
+      a.bank.c_str(), t.mode_count(), t.radius, tb.maps.mode_count(), tb.maps.objects.size(),
+      per_mode, m.bytes() / 1e6, build_s, hw, grids.c_str(), median_valid,
+      m.max_valid_radius / t.radius, m.series_modes, m.modes);
+  j["modes"] = tb.maps.mode_count();
+  j["objects"] = tb.maps.objects.size();
+  j["coefficients_per_mode"] = per_mode;
+  j["map"] = {{"grids", grids},
+              {"megabytes", m.bytes() / 1e6},
+              {"build_s", build_s},
+              {"series_only_modes", m.series_modes},
+              {"median_valid_radius_R", median_valid},
+              {"max_valid_radius_R", m.max_valid_radius / t.radius}};
+}
+
+// Every object's listener for update `rep` at distance d.
+void place(const Transfer& t, double d, int rep, std::vector<Vec3>& at) {
+  for (std::size_t o = 0; o < at.size(); ++o) at[o] = listener_at(t, d, rep, o);
+}
+
+// Median time per update at distance d: maps on one and on all threads, series, GPU series.
+void time_updates(const Transfer& t, double d, Tables& tb, runtime::GpuTransferGains* gpu,
+                  const gpu::Context* ctx, runtime::ThreadPool& pool, unsigned hw,
+                  nlohmann::json& row) {
+  const std::size_t n = tb.maps.mode_count();
+  std::vector<Vec3> at(tb.maps.objects.size());
+  runtime::ListenerFrame frame;
+  std::vector<float> a(n), b(n);
+  for (unsigned threads : {1u, hw}) {
+    runtime::ThreadPool p{int(threads)};
+    const double ms = median_ms([&](int rep) {
+      place(t, d, rep, at);
+      frame.update(tb.maps, at);
+      runtime::transfer_gains(tb.maps, frame, a, &p);
+    });
+    std::printf("  cpu maps,   %u thread%s   %8.3f ms per update\n", threads,
+                threads > 1 ? "s" : " ", ms);
+    row["cpu_maps_" + std::to_string(threads) + "_threads_ms"] = ms;
+  }
+  const double series_ms = median_ms([&](int rep) {
+    place(t, d, rep, at);
+    frame.update(tb.series, at);
+    runtime::transfer_gains(tb.series, frame, b, &pool);
+  });
+  std::printf("  cpu series, %u threads   %8.3f ms per update\n", hw, series_ms);
+  row["cpu_series_ms"] = series_ms;
+  if (!gpu) return;
+  double device = 0;
+  const double ms = median_ms([&](int rep) {
+    place(t, d, rep, at);
+    frame.update(tb.series, at, true);
+    gpu->compute(frame, b);
+    device = gpu->last_device_ms();
+  });
+  std::printf("  gpu series (%s)  %8.3f ms per update (device %.3f ms)\n", ctx->info().name.c_str(),
+              ms, device);
+  row["gpu_series_ms"] = ms;
+  row["gpu_device_ms"] = device;
+  row["gpu"] = ctx->info().name;
+}
+
+// Maps against the series over 31 listener positions at distance d, per mode off its nulls:
+// where the series gives at least 10 % (-20 dB) or 1 % (-40 dB) of the mode's largest gain over
+// those positions.
+void map_accuracy(const Transfer& t, double d, Tables& tb, runtime::ThreadPool& pool,
+                  nlohmann::json& row) {
+  const std::size_t n = tb.maps.mode_count();
+  std::vector<Vec3> at(tb.maps.objects.size());
+  runtime::ListenerFrame frame;
+  std::vector<float> a(n), b(n);
+  std::vector<std::vector<float>> ga, gb;
+  for (int rep = 0; rep < 31; ++rep) {
+    place(t, d, rep, at);
+    frame.update(tb.maps, at);
+    runtime::transfer_gains(tb.maps, frame, a, &pool);
+    frame.update(tb.series, at);
+    runtime::transfer_gains(tb.series, frame, b, &pool);
+    ga.emplace_back(a.begin(), a.begin() + t.mode_count());
+    gb.emplace_back(b.begin(), b.begin() + t.mode_count());
+  }
+  for (const double floor : {0.1, 0.01}) {
+    std::vector<double> err;
+    for (std::size_t i = 0; i < t.mode_count(); ++i) {
+      float peak = 0;
+      for (const auto& g : gb) peak = std::max(peak, g[i]);
+      for (std::size_t r = 0; r < gb.size(); ++r)
+        if (gb[r][i] > floor * peak && ga[r][i] > 0)
+          err.push_back(std::abs(20 * std::log10(double(ga[r][i]) / gb[r][i])));
+    }
+    std::sort(err.begin(), err.end());
+    const double p99 = err.empty() ? 0 : err[err.size() * 99 / 100];
+    const double worst = err.empty() ? 0 : err.back();
+    const double median = err.empty() ? 0 : err[err.size() / 2];
+    std::printf(
+        "  maps against series above %2.0f dB below the peak: median %.3f dB, 99th "
+        "percentile %.3f dB, worst %.3f dB\n",
+        -20 * std::log10(floor), median, p99, worst);
+    const std::string key = floor > 0.05 ? "map_error_20db" : "map_error_40db";
+    row[key] = {{"median_db", median}, {"p99_db", p99}, {"max_db", worst}};
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -57,62 +207,20 @@ int main(int argc, char** argv) {
                  argv[0]);
     return 2;
   }
-  std::string bank_path = argv[1], json_path, distances_arg = "3,10,30";
-  std::size_t gain_modes = 100000;
-  for (int i = 2; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--gain-modes"))
-      gain_modes = std::stoul(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--distances"))
-      distances_arg = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--json"))
-      json_path = argv[i + 1];
-  }
-  std::vector<double> distances;
-  std::stringstream ds(distances_arg);
-  for (std::string tok; std::getline(ds, tok, ',');) distances.push_back(std::stod(tok));
   try {
-    const Soundbank bank = read_soundbank(bank_path);
-    if (!bank.transfer) throw std::runtime_error(bank_path + " has no transfer");
+    const Args args = parse_args(argc, argv);
+    const Soundbank bank = read_soundbank(args.bank);
+    if (!bank.transfer) throw std::runtime_error(args.bank + " has no transfer");
     const Transfer& t = *bank.transfer;
     const unsigned hw = std::max(1u, std::thread::hardware_concurrency());
     runtime::ThreadPool pool{int(hw)};
     nlohmann::json j;
-    j["bank"] = bank_path;
+    j["bank"] = args.bank;
     j["modes_per_object"] = t.mode_count();
     j["radius_m"] = t.radius;
     j["threads"] = hw;
-
-    runtime::TransferTable maps, series;
-    series.map_options.reset();
-    auto t0 = clock_type::now();
-    maps.add(t, &pool);
-    const double build_s = since(t0);
-    series.add(t);
-    while (maps.mode_count() < gain_modes) maps.add_instance(0), series.add_instance(0);
-    const runtime::GainMap& m = maps.maps[0];
-    std::vector<float> valid = m.valid_radius;
-    std::sort(valid.begin(), valid.end());
-    const double median_valid = valid[valid.size() / 2] / t.radius;
-    std::string grids;
-    for (const auto& g : m.grids)
-      grids += " " + std::to_string(g.rows) + "x" + std::to_string(g.cols) + ":" +
-               std::to_string(g.modes.size());
-    std::printf(
-        "%s: %zu modes per object, R %.3f m; %zu modes in %zu objects, %.0f coefficients per mode\n"
-        "maps: %.1f MB, built in %.2f s (%u threads); grids (rows x cols: modes)%s\n"
-        "  valid radius: median %.1f R, largest %.1f R; %u of %u modes series-only\n",
-        bank_path.c_str(), t.mode_count(), t.radius, maps.mode_count(), maps.objects.size(),
-        double(t.coefficients.size()) / double(t.mode_count()), m.bytes() / 1e6, build_s, hw,
-        grids.c_str(), median_valid, m.max_valid_radius / t.radius, m.series_modes, m.modes);
-    j["modes"] = maps.mode_count();
-    j["objects"] = maps.objects.size();
-    j["coefficients_per_mode"] = double(t.coefficients.size()) / double(t.mode_count());
-    j["map"] = {{"grids", grids},
-                {"megabytes", m.bytes() / 1e6},
-                {"build_s", build_s},
-                {"series_only_modes", m.series_modes},
-                {"median_valid_radius_R", median_valid},
-                {"max_valid_radius_R", m.max_valid_radius / t.radius}};
+    Tables tb;
+    build_tables(args, t, pool, hw, tb, j);
 
     std::shared_ptr<gpu::Context> ctx;
     try {
@@ -121,86 +229,14 @@ int main(int argc, char** argv) {
       std::printf("no Vulkan device (%s): GPU rows skipped\n", e.what());
     }
     std::unique_ptr<runtime::GpuTransferGains> gpu;
-    if (ctx) gpu = std::make_unique<runtime::GpuTransferGains>(ctx, series);
-
-    const std::size_t n = maps.mode_count();
-    std::vector<Vec3> at(maps.objects.size());
-    runtime::ListenerFrame frame;
-    std::vector<float> a(n), b(n);
-    for (double d : distances) {
-      auto place = [&](int rep) {
-        for (std::size_t o = 0; o < at.size(); ++o) at[o] = listener_at(t, d, rep, o);
-      };
+    if (ctx) gpu = std::make_unique<runtime::GpuTransferGains>(ctx, tb.series);
+    for (double d : args.distances) {
       nlohmann::json& row = j["distances"][std::to_string(d)];
       std::printf("listener at %.1f R (%.2f m):\n", d, d * t.radius);
-      for (unsigned threads : {1u, hw}) {
-        runtime::ThreadPool p{int(threads)};
-        const double ms = median_ms([&](int rep) {
-          place(rep);
-          frame.update(maps, at);
-          runtime::transfer_gains(maps, frame, a, &p);
-        });
-        std::printf("  cpu maps,   %u thread%s   %8.3f ms per update\n", threads,
-                    threads > 1 ? "s" : " ", ms);
-        row["cpu_maps_" + std::to_string(threads) + "_threads_ms"] = ms;
-      }
-      const double series_ms = median_ms([&](int rep) {
-        place(rep);
-        frame.update(series, at);
-        runtime::transfer_gains(series, frame, b, &pool);
-      });
-      std::printf("  cpu series, %u threads   %8.3f ms per update\n", hw, series_ms);
-      row["cpu_series_ms"] = series_ms;
-      if (gpu) {
-        double device = 0;
-        const double ms = median_ms([&](int rep) {
-          place(rep);
-          frame.update(series, at, true);
-          gpu->compute(frame, b);
-          device = gpu->last_device_ms();
-        });
-        std::printf("  gpu series (%s)  %8.3f ms per update (device %.3f ms)\n",
-                    ctx->info().name.c_str(), ms, device);
-        row["gpu_series_ms"] = ms;
-        row["gpu_device_ms"] = device;
-        row["gpu"] = ctx->info().name;
-      }
-      // Accuracy: maps against the series over 31 listener positions, per mode off its nulls
-      // (gains above 1 % of the mode's largest gain over those positions).
-      std::vector<std::vector<float>> ga, gb;
-      for (int rep = 0; rep < 31; ++rep) {
-        place(rep);
-        frame.update(maps, at);
-        runtime::transfer_gains(maps, frame, a, &pool);
-        frame.update(series, at);
-        runtime::transfer_gains(series, frame, b, &pool);
-        ga.emplace_back(a.begin(), a.begin() + t.mode_count());
-        gb.emplace_back(b.begin(), b.begin() + t.mode_count());
-      }
-      // Off the nulls: where the series gives at least 10 % (-20 dB) or 1 % (-40 dB) of the
-      // mode's largest gain over these positions.
-      for (const double floor : {0.1, 0.01}) {
-        std::vector<double> err;
-        for (std::size_t i = 0; i < t.mode_count(); ++i) {
-          float peak = 0;
-          for (const auto& g : gb) peak = std::max(peak, g[i]);
-          for (std::size_t r = 0; r < gb.size(); ++r)
-            if (gb[r][i] > floor * peak && ga[r][i] > 0)
-              err.push_back(std::abs(20 * std::log10(double(ga[r][i]) / gb[r][i])));
-        }
-        std::sort(err.begin(), err.end());
-        const double p99 = err.empty() ? 0 : err[err.size() * 99 / 100];
-        const double worst = err.empty() ? 0 : err.back();
-        const double median = err.empty() ? 0 : err[err.size() / 2];
-        std::printf(
-            "  maps against series above %2.0f dB below the peak: median %.3f dB, 99th "
-            "percentile %.3f dB, worst %.3f dB\n",
-            -20 * std::log10(floor), median, p99, worst);
-        const std::string key = floor > 0.05 ? "map_error_20db" : "map_error_40db";
-        row[key] = {{"median_db", median}, {"p99_db", p99}, {"max_db", worst}};
-      }
+      time_updates(t, d, tb, gpu.get(), ctx.get(), pool, hw, row);
+      map_accuracy(t, d, tb, pool, row);
     }
-    if (!json_path.empty()) std::ofstream(json_path) << j.dump(2) << '\n';
+    if (!args.json.empty()) std::ofstream(args.json) << j.dump(2) << '\n';
   } catch (const std::exception& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
