@@ -66,23 +66,9 @@ bool ok(chladni_status s, const char* what) {
   return s == CHLADNI_OK;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) try {
-  const Args a = parse(argc, argv);
-  chladni_config c;
-  chladni_config_default(&c);
-  c.backend = a.backend == "gpu" ? CHLADNI_BACKEND_GPU : CHLADNI_BACKEND_CPU;
-  c.block_size = a.block;
-  c.threads = a.threads;
-  c.max_objects = a.objects;
-  c.mode_budget = std::max<uint32_t>(65536, a.objects * a.modes);
-  c.gpu_pipeline = a.pipeline;
-  chladni_runtime* rt = nullptr;
-  if (!ok(chladni_runtime_create(&c, &rt), "create")) return 1;
-  std::mt19937 rng(7);
+// Each object: modes from 80 Hz up, log-spaced to 16 kHz, decays 2-40 /s.
+bool spawn_objects(chladni_runtime* rt, const Args& a, std::mt19937& rng) {
   std::uniform_real_distribution<double> u(0, 1);
-  // Each object: modes from 80 Hz up, log-spaced to 16 kHz, decays 2-40 /s.
   for (uint32_t k = 0; k < a.objects; ++k) {
     std::vector<double> hz(a.modes), decay(a.modes), amp(a.modes);
     const double f0 = 80 * (1 + 0.3 * u(rng));
@@ -94,25 +80,27 @@ int main(int argc, char** argv) try {
     chladni_bank* bank = nullptr;
     if (!ok(chladni_bank_from_modes(rt, hz.data(), decay.data(), amp.data(), a.modes, &bank),
             "bank"))
-      return 1;
+      return false;
     const double at[3] = {4 * u(rng) - 2, 1 + 3 * u(rng), 0}, q[4] = {1, 0, 0, 0};
     uint32_t id = 0;
-    if (!ok(chladni_spawn(rt, bank, at, q, 1.0, &id), "spawn")) return 1;
+    if (!ok(chladni_spawn(rt, bank, at, q, 1.0, &id), "spawn")) return false;
   }
-  const double fs = c.sample_rate, block_s = a.block / fs;
-  const uint64_t blocks = static_cast<uint64_t>(a.seconds / block_s);
-  std::exponential_distribution<double> gap(a.rate);
-  double next_hit = gap(rng), next_move = 0;
-  std::vector<float> out(static_cast<std::size_t>(a.block) * c.channels);
-  std::vector<double> ms;
-  ms.reserve(blocks);
+  return true;
+}
+
+// The game thread's posts: Poisson impacts and a listener moving every 50 ms.
+struct Game {
+  std::mt19937 rng{7};
+  std::uniform_real_distribution<double> u{0, 1};
+  std::exponential_distribution<double> gap;
+  double next_hit = 0, next_move = 0;
   uint64_t impacts = 0, full = 0;
-  const auto start = std::chrono::steady_clock::now();
-  for (uint64_t b = 0; b < blocks; ++b) {
-    if (a.pace)
-      std::this_thread::sleep_until(start + std::chrono::duration<double>(double(b) * block_s));
-    const double t = chladni_time(rt), end = t + block_s;
-    for (; next_hit < end; next_hit += gap(rng)) {  // the game thread's posts for this block
+
+  explicit Game(double rate) : gap(rate) {}
+
+  // Everything that falls before `end`.
+  void post_until(chladni_runtime* rt, const Args& a, double end) {
+    for (; next_hit < end; next_hit += gap(rng)) {
       chladni_impact im{};
       im.object = static_cast<uint32_t>(u(rng) * a.objects) % a.objects;
       im.time = next_hit;
@@ -128,11 +116,11 @@ int main(int argc, char** argv) try {
       const double p[3] = {std::sin(next_move), 0, 0}, f[3] = {0, 1, 0}, up[3] = {0, 0, 1};
       chladni_post_listener(rt, next_move, p, f, up);
     }
-    const auto t0 = std::chrono::steady_clock::now();
-    if (!ok(chladni_render(rt, out.data(), a.block), "render")) return 1;
-    ms.push_back(
-        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
+};
+
+void report(chladni_runtime* rt, const Args& a, const Game& g, const std::vector<double>& ms,
+            double block_s) {
   std::vector<double> sorted = ms;
   std::sort(sorted.begin(), sorted.end());
   double mean = 0;
@@ -145,7 +133,7 @@ int main(int argc, char** argv) try {
       "%s: %u objects x %u modes, %.0f impacts/s (%llu posted, %llu refused: queue full), "
       "block %u (%.2f ms), output latency %.2f ms%s\n",
       chladni_runtime_backend(rt), a.objects, a.modes, a.rate,
-      static_cast<unsigned long long>(impacts), static_cast<unsigned long long>(full), a.block,
+      static_cast<unsigned long long>(g.impacts), static_cast<unsigned long long>(g.full), a.block,
       budget, 1e3 * chladni_latency(rt), a.pace ? ", paced at real time" : "");
   std::printf(
       "render per block: mean %.3f ms, p99 %.3f ms, worst %.3f ms at block %lld (%.1fx real "
@@ -153,22 +141,56 @@ int main(int argc, char** argv) try {
       mean, p99, worst, static_cast<long long>(worst_block), budget / mean,
       static_cast<unsigned long long>(
           std::count_if(ms.begin(), ms.end(), [&](double x) { return x > budget; })));
-  if (!a.json.empty()) {
-    nlohmann::json j = {{"backend", chladni_runtime_backend(rt)},
-                        {"objects", a.objects},
-                        {"modes", a.modes},
-                        {"rate", a.rate},
-                        {"block", a.block},
-                        {"seconds", a.seconds},
-                        {"mean_ms", mean},
-                        {"p99_ms", p99},
-                        {"worst_ms", worst},
-                        {"budget_ms", budget},
-                        {"latency_ms", 1e3 * chladni_latency(rt)},
-                        {"paced", a.pace != 0},
-                        {"impacts", impacts}};
-    std::ofstream(a.json) << j.dump(2) << "\n";
+  if (a.json.empty()) return;
+  nlohmann::json j = {{"backend", chladni_runtime_backend(rt)},
+                      {"objects", a.objects},
+                      {"modes", a.modes},
+                      {"rate", a.rate},
+                      {"block", a.block},
+                      {"seconds", a.seconds},
+                      {"mean_ms", mean},
+                      {"p99_ms", p99},
+                      {"worst_ms", worst},
+                      {"budget_ms", budget},
+                      {"latency_ms", 1e3 * chladni_latency(rt)},
+                      {"paced", a.pace != 0},
+                      {"impacts", g.impacts}};
+  std::ofstream(a.json) << j.dump(2) << "\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) try {
+  const Args a = parse(argc, argv);
+  chladni_config c;
+  chladni_config_default(&c);
+  c.backend = a.backend == "gpu" ? CHLADNI_BACKEND_GPU : CHLADNI_BACKEND_CPU;
+  c.block_size = a.block;
+  c.threads = a.threads;
+  c.max_objects = a.objects;
+  c.mode_budget = std::max<uint32_t>(65536, a.objects * a.modes);
+  c.gpu_pipeline = a.pipeline;
+  chladni_runtime* rt = nullptr;
+  if (!ok(chladni_runtime_create(&c, &rt), "create")) return 1;
+  Game g(a.rate);
+  if (!spawn_objects(rt, a, g.rng)) return 1;
+  g.next_hit = g.gap(g.rng);  // after the objects: the same draws as always
+  const double fs = c.sample_rate, block_s = a.block / fs;
+  const uint64_t blocks = static_cast<uint64_t>(a.seconds / block_s);
+  std::vector<float> out(static_cast<std::size_t>(a.block) * c.channels);
+  std::vector<double> ms;
+  ms.reserve(blocks);
+  const auto start = std::chrono::steady_clock::now();
+  for (uint64_t b = 0; b < blocks; ++b) {
+    if (a.pace)
+      std::this_thread::sleep_until(start + std::chrono::duration<double>(double(b) * block_s));
+    g.post_until(rt, a, chladni_time(rt) + block_s);
+    const auto t0 = std::chrono::steady_clock::now();
+    if (!ok(chladni_render(rt, out.data(), a.block), "render")) return 1;
+    ms.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
   }
+  report(rt, a, g, ms, block_s);
   chladni_runtime_destroy(rt);
   return 0;
 } catch (const std::exception& e) {
