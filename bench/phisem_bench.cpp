@@ -18,6 +18,7 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 
 #include "chladni/core/random.hpp"
@@ -106,30 +107,91 @@ Result run(const std::string& load, const std::string& backend, Filterbank& fb,
   return r;
 }
 
+CpuIsa cpu_isa(const std::string& isa) {
+  return isa == "scalar"   ? CpuIsa::Scalar
+         : isa == "avx2"   ? CpuIsa::Avx2
+         : isa == "avx512" ? CpuIsa::Avx512
+                           : CpuIsa::Auto;
+}
+
+struct Args {
+  double seconds = 3;
+  int threads = 0;
+  std::string json, backends = "cpu,gpu", isa = "auto";
+};
+
+// Throws std::invalid_argument with the message to print.
+Args parse_args(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--seconds"))
+      a.seconds = std::atof(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--threads"))
+      a.threads = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--backend"))
+      a.backends = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--isa"))
+      a.isa = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--json"))
+      a.json = argv[i + 1];
+    else
+      throw std::invalid_argument(std::string("unknown option ") + argv[i]);
+  }
+  if (!(a.seconds > 0)) throw std::invalid_argument("--seconds must be > 0");
+  const CpuIsa isa = cpu_isa(a.isa);
+  if (!CpuFilterbank::supports(isa))
+    throw std::invalid_argument("this processor cannot run --isa " + a.isa);
+  return a;
+}
+
+// A filterbank for `voices` on `backend`; null where there is no Vulkan device.
+std::unique_ptr<Filterbank> make_filterbank(const std::string& backend, const Args& a,
+                                            const std::vector<ShakerVoice>& voices) {
+  uint32_t slots = 0;
+  for (const auto& v : voices) slots += static_cast<uint32_t>(v.resonances.size());
+  if (backend != "gpu")
+    return std::make_unique<CpuFilterbank>(CpuFilterbankOptions{.capacity = slots,
+                                                                .channels = 1,
+                                                                .threads = a.threads,
+                                                                .isa = cpu_isa(a.isa),
+                                                                .max_frames = kBlock});
+  try {
+    auto ctx = std::make_shared<gpu::Context>();
+    return std::make_unique<GpuFilterbank>(
+        ctx, GpuFilterbankOptions{.capacity = slots,
+                                  .channels = 1,
+                                  .max_frames = kBlock,
+                                  .max_streams = static_cast<uint32_t>(voices.size())});
+  } catch (const gpu::NoDeviceError& e) {
+    std::fprintf(stderr, "gpu: %s; skipped\n", e.what());
+    return nullptr;
+  }
+}
+
+void write_json(const std::string& path, const std::vector<Result>& results) {
+  nlohmann::json j = nlohmann::json::array();
+  for (const Result& r : results)
+    j.push_back({{"load", r.load},
+                 {"backend", r.backend},
+                 {"device", r.device},
+                 {"voices", r.voices},
+                 {"slots", r.slots},
+                 {"block_frames", kBlock},
+                 {"block_ms_p50", r.p50},
+                 {"block_ms_p99", r.p99},
+                 {"device_ms_p50", r.device_ms},
+                 {"realtime_factor", r.realtime}});
+  std::ofstream(path) << j.dump(2) << "\n";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  double seconds = 3;
-  int threads = 0;
-  std::string json_path, backends = "cpu,gpu", isa = "auto";
-  for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--seconds"))
-      seconds = std::atof(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--threads"))
-      threads = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--backend"))
-      backends = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--isa"))
-      isa = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--json"))
-      json_path = argv[i + 1];
-    else {
-      std::fprintf(stderr, "unknown option %s\n", argv[i]);
-      return 2;
-    }
-  }
-  if (!(seconds > 0)) {
-    std::fprintf(stderr, "--seconds must be > 0\n");
+  Args args;
+  try {
+    args = parse_args(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
     return 2;
   }
   // Load 1: 1,000 voices of four retuned resonances.
@@ -144,43 +206,14 @@ int main(int argc, char** argv) {
     objects.push_back(object_voice(phisem_preset("gravel"), object, kFs, 1e-3, 16, v + 1));
 
   std::vector<Result> results;
-  std::stringstream ss(backends);
-  std::string backend;
-  while (std::getline(ss, backend, ',')) {
+  std::stringstream ss(args.backends);
+  for (std::string backend; std::getline(ss, backend, ',');) {
     for (int load = 0; load < 2; ++load) {
       const auto& voices = load == 0 ? shakers : objects;
-      uint32_t slots = 0;
-      for (const auto& v : voices) slots += static_cast<uint32_t>(v.resonances.size());
-      std::unique_ptr<Filterbank> fb;
-      if (backend == "gpu") {
-        try {
-          auto ctx = std::make_shared<gpu::Context>();
-          fb = std::make_unique<GpuFilterbank>(
-              ctx, GpuFilterbankOptions{.capacity = slots,
-                                        .channels = 1,
-                                        .max_frames = kBlock,
-                                        .max_streams = static_cast<uint32_t>(voices.size())});
-        } catch (const gpu::NoDeviceError& e) {
-          std::fprintf(stderr, "gpu: %s; skipped\n", e.what());
-          break;
-        }
-      } else {
-        const CpuIsa cpu_isa = isa == "scalar"   ? CpuIsa::Scalar
-                               : isa == "avx2"   ? CpuIsa::Avx2
-                               : isa == "avx512" ? CpuIsa::Avx512
-                                                 : CpuIsa::Auto;
-        if (!CpuFilterbank::supports(cpu_isa)) {
-          std::fprintf(stderr, "this processor cannot run --isa %s\n", isa.c_str());
-          return 2;
-        }
-        fb = std::make_unique<CpuFilterbank>(CpuFilterbankOptions{.capacity = slots,
-                                                                  .channels = 1,
-                                                                  .threads = threads,
-                                                                  .isa = cpu_isa,
-                                                                  .max_frames = kBlock});
-      }
+      const std::unique_ptr<Filterbank> fb = make_filterbank(backend, args, voices);
+      if (!fb) break;
       results.push_back(run(load == 0 ? "1000 voices x 4 resonances" : "100 voices x 1000 modes",
-                            backend, *fb, voices, seconds, threads));
+                            backend, *fb, voices, args.seconds, args.threads));
       const Result& r = results.back();
       std::printf(
           "%-28s %-4s %6u slots  block p50 %7.3f ms  p99 %7.3f ms  device %7.3f ms  %6.1fx real "
@@ -189,20 +222,6 @@ int main(int argc, char** argv) {
           r.device.c_str());
     }
   }
-  if (!json_path.empty()) {
-    nlohmann::json j = nlohmann::json::array();
-    for (const Result& r : results)
-      j.push_back({{"load", r.load},
-                   {"backend", r.backend},
-                   {"device", r.device},
-                   {"voices", r.voices},
-                   {"slots", r.slots},
-                   {"block_frames", kBlock},
-                   {"block_ms_p50", r.p50},
-                   {"block_ms_p99", r.p99},
-                   {"device_ms_p50", r.device_ms},
-                   {"realtime_factor", r.realtime}});
-    std::ofstream(json_path) << j.dump(2) << "\n";
-  }
+  if (!args.json.empty()) write_json(args.json, results);
   return 0;
 }
