@@ -43,15 +43,13 @@ std::vector<double> frequency_errors(const nlohmann::json& meta, const Soundbank
 }
 
 nlohmann::json transfer_json(const Transfer& t) {
-  std::size_t poor = 0;
-  for (std::size_t i = 0; i < t.mode_count(); ++i) poor += t.poor(i);
   return {{"centre", t.centre},
           {"radius_m", t.radius},
           {"sound_speed", t.sound_speed},
           {"air_density", t.air_density},
           {"coefficients", t.coefficients.size()},
           {"poor_fit_threshold", Transfer::kPoorFit},
-          {"poor_fits", poor}};
+          {"poor_fits", t.poor_fits()}};
 }
 
 nlohmann::json mode_json(const Soundbank& b, std::size_t i, const std::vector<double>& ferr) {
@@ -101,13 +99,11 @@ nlohmann::json info_json(const std::string& path, const Soundbank& b, const nloh
 }
 
 void print_transfer(const Transfer& t) {
-  std::size_t poor = 0;
-  for (std::size_t i = 0; i < t.mode_count(); ++i) poor += t.poor(i);
   std::printf(
       "transfer  multipole about (%.4g, %.4g, %.4g) m, R %.4g m, c %.4g m/s, rho0 %.4g "
       "kg/m^3; %zu coefficients; %zu poor fits (held-out error > %.0f%%)\n",
       t.centre[0], t.centre[1], t.centre[2], t.radius, t.sound_speed, t.air_density,
-      t.coefficients.size(), poor, 100.0 * Transfer::kPoorFit);
+      t.coefficients.size(), t.poor_fits(), 100.0 * Transfer::kPoorFit);
   std::size_t bem = 0;
   for (const ModeTransfer& m : t.modes) bem += m.method == TransferMethod::Bem;
   if (bem > 0)

@@ -150,10 +150,9 @@ void add_transfer(Soundbank& bank, const SurfaceMesh& surface, double max_memory
   } catch (const BudgetError& e) {
     throw BudgetError(origin + ": " + e.what());
   }
-  for (std::size_t i = 0; i < bank.transfer->mode_count(); ++i) {
-    r.poor_fits += bank.transfer->poor(i);
-    r.max_held_out = std::max(r.max_held_out, double(bank.transfer->modes[i].held_out_error));
-  }
+  r.poor_fits += bank.transfer->poor_fits();
+  for (const ModeTransfer& m : bank.transfer->modes)
+    r.max_held_out = std::max(r.max_held_out, double(m.held_out_error));
 }
 
 // The soundbank's META section: how it was made, for `chladni info` and the batch's stamp.

@@ -61,6 +61,12 @@ struct Transfer {
   std::complex<double> pressure(std::size_t mode, const Vec3& x) const;
   bool poor(std::size_t mode) const { return !(modes[mode].held_out_error <= kPoorFit); }
   bool usable(std::size_t mode) const { return modes[mode].held_out_error <= kUnusable; }
+  /// How many modes are poor().
+  std::size_t poor_fits() const {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < modes.size(); ++i) n += poor(i);
+    return n;
+  }
   /// Throws InputError naming the first bad count, order or non-finite value.
   void validate() const;
   /// The listed modes only, in that order.
