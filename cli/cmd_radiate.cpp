@@ -127,10 +127,9 @@ struct Radiated {
 // The field at pts by BEM or by equivalent sources (whichever the method asks), read from the
 // surface solution, the sources or their multipole series (--via).
 Radiated radiate(const RadiateArgs& a, const precompute::SurfaceMesh& mesh,
-                 const precompute::RadiatingSurface& surf, const std::vector<cd>& un,
+                 const precompute::RadiatingSurface& surf, double k, const std::vector<cd>& un,
                  const std::vector<Vec3>& pts, precompute::AcousticOptions o,
                  const std::shared_ptr<gpu::Context>& ctx, precompute::TransferKernels& kernels) {
-  const double k = 2 * std::numbers::pi * a.freq / o.sound_speed;
   Radiated r;
   r.bem = precompute::resolve_method(surf, k, o) == precompute::AcousticOptions::Method::Bem;
   const precompute::NormalVelocity un_of = surf.from_vertex_values(un);
@@ -167,13 +166,13 @@ Radiated radiate(const RadiateArgs& a, const precompute::SurfaceMesh& mesh,
 }
 
 nlohmann::json radiate_json(const RadiateArgs& a, const precompute::RadiatingSurface& surf,
-                            const Radiated& r, const std::vector<Vec3>& pts,
+                            double k, const Radiated& r, const std::vector<Vec3>& pts,
                             const std::string& kernels) {
   const ModeTransfer& mt = r.mt;
   nlohmann::json j;
   j["mesh"] = a.mesh;
   j["frequency_hz"] = a.freq;
-  j["wavenumber"] = 2 * std::numbers::pi * a.freq / a.sound_speed;
+  j["wavenumber"] = k;
   j["method"] = to_string(mt.method);
   j["kernels"] = kernels;
   j["via"] = a.via == "multipole" ? "multipole" : r.bem ? "surface" : "sources";
@@ -238,7 +237,7 @@ void run_radiate(const RadiateArgs& a) {
   const precompute::RadiatingSurface surf(mesh, o);
   // Past a few hundred wavelengths across, no method here resolves the field (BEM elements,
   // sources and multipole orders are all capped): refuse rather than print a wrong field.
-  const double ka = 2 * std::numbers::pi * a.freq / a.sound_speed * surf.radius();
+  const double k = 2 * std::numbers::pi * a.freq / a.sound_speed, ka = k * surf.radius();
   if (!(ka <= 1000))
     throw InputError(a.mesh + ": k R = " + std::to_string(ka) + " at --freq " +
                      std::to_string(a.freq) +
@@ -248,9 +247,9 @@ void run_radiate(const RadiateArgs& a) {
   std::unique_ptr<precompute::TransferKernels> kernels =
       ctx ? precompute::make_gpu_transfer_kernels(ctx) : precompute::make_cpu_transfer_kernels();
   o.method = parse_transfer_method(a.method, "--method");
-  const Radiated r = radiate(a, mesh, surf, un, pts, o, ctx, *kernels);
+  const Radiated r = radiate(a, mesh, surf, k, un, pts, o, ctx, *kernels);
   if (!a.json_path.empty())
-    write_file_atomic(a.json_path, radiate_json(a, surf, r, pts, kernels->name()).dump(2) + "\n",
+    write_file_atomic(a.json_path, radiate_json(a, surf, k, r, pts, kernels->name()).dump(2) + "\n",
                       "--json");
   print_radiated(a, ka, r, pts, kernels->name());
 }
