@@ -14,19 +14,17 @@
 #include <string>
 #include <thread>
 
+#include "bench_support.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
 #include "chladni/runtime/modal/transfer_gains.hpp"
 #include "chladni/runtime/thread_pool.hpp"
 
 using namespace chladni;
-using clock_type = std::chrono::steady_clock;
+using bench::clock_type;
+using bench::seconds_since;
 
 namespace {
-
-double since(clock_type::time_point t0) {
-  return std::chrono::duration<double>(clock_type::now() - t0).count();
-}
 
 // The listener for update `rep` of object `o`: distance d (in units of R) about the centre, in a
 // direction that turns from update to update and object to object.
@@ -43,7 +41,7 @@ double median_ms(F&& fn) {
   for (int rep = 0; rep < 31; ++rep) {
     const auto s = clock_type::now();
     fn(rep);
-    ms.push_back(1e3 * since(s));
+    ms.push_back(1e3 * seconds_since(s));
   }
   std::sort(ms.begin(), ms.end());
   return ms[ms.size() / 2];
@@ -82,7 +80,7 @@ void build_tables(const Args& a, const Transfer& t, runtime::ThreadPool& pool, u
   tb.series.map_options.reset();
   const auto t0 = clock_type::now();
   tb.maps.add(t, &pool);
-  const double build_s = since(t0);
+  const double build_s = seconds_since(t0);
   tb.series.add(t);
   while (tb.maps.mode_count() < a.gain_modes) tb.maps.add_instance(0), tb.series.add_instance(0);
   const runtime::GainMap& m = tb.maps.maps[0];
@@ -90,9 +88,12 @@ void build_tables(const Args& a, const Transfer& t, runtime::ThreadPool& pool, u
   std::sort(valid.begin(), valid.end());
   const double median_valid = valid[valid.size() / 2] / t.radius;
   std::string grids;
-  for (const auto& g : m.grids)
-    grids += " " + std::to_string(g.rows) + "x" + std::to_string(g.cols) + ":" +
-             std::to_string(g.modes.size());
+  for (const auto& g : m.grids) {
+    char cell[64];  // " rows x cols: modes"
+    std::snprintf(cell, sizeof cell, " %ux%u:%zu", unsigned(g.rows), unsigned(g.cols),
+                  g.modes.size());
+    grids += cell;
+  }
   const double per_mode = double(t.coefficients.size()) / double(t.mode_count());
   std::printf(
       "%s: %zu modes per object, R %.3f m; %zu modes in %zu objects, %.0f coefficients per mode\n"

@@ -15,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "bench_support.hpp"
 #include "chladni/gpu/context.hpp"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
 #include "chladni/runtime/filterbank/gpu_filterbank.hpp"
@@ -27,10 +28,10 @@ using namespace chladni;
 
 namespace {
 
-using clock_type = std::chrono::steady_clock;
+using bench::clock_type;
 
 double ms_since(clock_type::time_point t0) {
-  return 1e3 * std::chrono::duration<double>(clock_type::now() - t0).count();
+  return 1e3 * bench::seconds_since(t0);
 }
 
 struct Args {
@@ -142,13 +143,7 @@ nlohmann::json synthesis_row(const std::string& name, const PaperAnimation& a,
 }  // namespace
 
 int main(int argc, char** argv) {
-  Args args;
-  try {
-    args = parse_args(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  }
+  const Args args = bench::parse_or_exit(parse_args, argc, argv);
   const auto g0 = clock_type::now();
   const runtime::PaperSoundDb db = tools::generate_paper_database({});
   std::printf("default database generated in %.2f s\n", 1e-3 * ms_since(g0));

@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "bench_support.hpp"
 #include "chladni/core/random.hpp"
 #include "chladni/gpu/context.hpp"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
@@ -187,13 +188,7 @@ void write_json(const std::string& path, const std::vector<Result>& results) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Args args;
-  try {
-    args = parse_args(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  }
+  const Args args = bench::parse_or_exit(parse_args, argc, argv);
   // Load 1: 1,000 voices of four retuned resonances.
   PhisemPreset bells = phisem_preset("sleighbells");
   bells.resonances.resize(4);

@@ -17,19 +17,17 @@
 
 #include <sys/resource.h>
 
+#include "bench_support.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/gpu/context.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
 #include "chladni/precompute/memory_budget.hpp"
 
 using namespace chladni;
-using clock_type = std::chrono::steady_clock;
+using bench::clock_type;
+using bench::seconds_since;
 
 namespace {
-
-double since(clock_type::time_point t0) {
-  return std::chrono::duration<double>(clock_type::now() - t0).count();
-}
 
 struct Args {
   std::string bank, json, solver = "normal", backends = "cpu,gpu", method = "sources";
@@ -102,9 +100,9 @@ nlohmann::json fit_row(const Run& run, const precompute::RadiatingSurface& surf,
   Transfer t = precompute::compute_transfer(
       surf, bank, ro, *kernels, &times, [&](std::size_t done, std::size_t total) {
         if (a.method != "sources")
-          std::fprintf(stderr, "  %zu/%zu modes, %.0f s\n", done, total, since(t0));
+          std::fprintf(stderr, "  %zu/%zu modes, %.0f s\n", done, total, seconds_since(t0));
       });
-  const double wall = since(t0);
+  const double wall = seconds_since(t0);
   std::size_t poor = 0, coeffs = t.coefficients.size(), bem = 0;
   double sources = 0;
   for (std::size_t i = 0; i < t.mode_count(); ++i) {
@@ -142,13 +140,7 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "usage: %s BANK [--modes N] [--json OUT]\n", argv[0]);
     return 2;
   }
-  Args args;
-  try {
-    args = parse_args(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s\n", e.what());
-    return 2;
-  }
+  const Args args = bench::parse_or_exit(parse_args, argc, argv);
   try {
     const Soundbank bank = first_modes(read_soundbank(args.bank), args.modes);
     nlohmann::json j;
@@ -162,7 +154,7 @@ int main(int argc, char** argv) {
     const precompute::AcousticOptions o = acoustic_options(args);
     const auto t0 = clock_type::now();
     const precompute::RadiatingSurface surf({bank.vertices, bank.triangles}, o);
-    j["prepare_s"] = since(t0);
+    j["prepare_s"] = seconds_since(t0);
     j["radius_m"] = surf.radius();
     std::printf(
         "%s: %zu triangles, first %zu modes (to %.0f Hz), R %.3f m; surface preparation %.2f s\n",
