@@ -103,8 +103,9 @@ Soundbank damped_bank(const SurfaceMesh& surface, const Eigen::MatrixXd& shapes,
   r.overdamped = sel.overdamped, r.below_band = sel.below_band, r.above_band = sel.above_band;
   r.kept = sel.kept.size();
   if (sel.kept.empty()) {
+    // The solve stops at max_frequency: with nothing below it, the lowest lies above.
     std::string lowest = model.omega.empty()
-                             ? "none computed"
+                             ? "above " + std::to_string(int(o.max_frequency)) + " Hz"
                              : std::to_string(model.omega[0] / (2 * std::numbers::pi)) + " Hz";
     throw InputError(origin + ": no mode lies in [" + std::to_string(int(o.min_frequency)) +
                      " Hz, " + std::to_string(int(std::min(o.max_frequency, o.sample_rate / 2))) +
