@@ -190,7 +190,7 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
       r.tets, a.order, r.nodes, r.dofs, r.max_tet_volume, r.quality.max_radius_edge,
       r.quality.mean_radius_edge, r.quality.min_dihedral_deg);
   std::string stopped = r.eigen.capped ? " (stopped at --mode-cap before --max-freq)" : "";
-  if (a.max_modes > 0 && r.computed < a.max_modes)
+  if (a.max_modes > 0 && r.computed - r.below_band < a.max_modes)
     stopped = " (of the " + std::to_string(a.max_modes) + " asked for, those below --max-freq)";
   std::printf("eigen-solve (%s): %zu rigid modes removed, %zu elastic modes, max residual %.2g%s\n",
               r.eigen.factorization.c_str(), r.eigen.rigid_removed, r.computed, r.max_residual,
@@ -276,7 +276,7 @@ void add_input_options(CLI::App* cmd, PrecomputeArgs* a) {
 // What to compute, how accurately, within what memory; checking and repairing the surface.
 void add_solver_options(CLI::App* cmd, PrecomputeArgs* a) {
   cmd->add_option("--max-modes", a->max_modes,
-                  "Compute the first N elastic modes below --max-freq (0: all below it)")
+                  "Compute the first N elastic modes from 20 Hz to --max-freq (0: all below it)")
       ->check(CLI::Range(0, 100000));
   cmd->add_option("--max-freq", a->max_freq, "Highest frequency of interest (Hz)")
       ->check(finite_above(0, 1e6))

@@ -314,6 +314,32 @@ TEST(ModalFem, BandSearchKeepsOnlyConvergedModes) {
   }
 }
 
+// N modes asked for are N at or above min_frequency: those below come first, and do not count.
+TEST(ModalFem, ModesBelowTheBandDoNotCountTowardN) {
+  const auto [fem, km] = steel_box(4e-6);
+  const Eigen::MatrixXd rigid = rigid_body_modes(fem.nodes);
+  EigenOptions o;
+  o.modes = 40;
+  o.max_frequency = 1e6;
+  const EigenResult all = solve_modes(km.K, km.M, rigid, o);
+  ASSERT_EQ(all.lambda.size(), 40u);
+  o.min_frequency = 0.5 * (hz(std::sqrt(all.lambda[8])) + hz(std::sqrt(all.lambda[9])));
+  o.modes = 20;  // 9 below the bottom, then 20
+  for (auto method : {EigenOptions::Method::BlockLanczos, EigenOptions::Method::Spectra}) {
+    o.method = method;
+    const EigenResult r = solve_modes(km.K, km.M, rigid, o);
+    ASSERT_EQ(r.lambda.size(), 29u) << int(method);
+    for (std::size_t i = 0; i < 29; ++i) {
+      EXPECT_NEAR(r.lambda[i] / all.lambda[i], 1.0, 1e-8) << "mode " << i;
+      EXPECT_LT(r.residual[i], 1e-6) << "mode " << i;
+    }
+  }
+  // Where the band's top comes first, the modes below the bottom are still all there.
+  o.method = EigenOptions::Method::BlockLanczos;
+  o.max_frequency = 0.5 * (hz(std::sqrt(all.lambda[14])) + hz(std::sqrt(all.lambda[15])));
+  EXPECT_EQ(solve_modes(km.K, km.M, rigid, o).lambda.size(), 15u);
+}
+
 #ifdef CHLADNI_HAVE_CHOLMOD
 // The factorization orders K - sigma M by its node graph (3 x 3 blocks): about the fill of
 // ordering the scalar matrix, and still a correct factor where the blocks are not nodes.

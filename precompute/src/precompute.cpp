@@ -236,6 +236,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   EigenOptions eo;
   eo.modes = o.max_modes;
   eo.max_frequency = o.max_frequency;
+  eo.min_frequency = o.min_frequency;
   eo.mode_cap = o.mode_cap;
   eo.method = o.eigensolver;
   eo.max_memory = o.max_memory < 0 ? default_memory_budget() : o.max_memory;

@@ -47,11 +47,18 @@ double blas_rate() {
 // rotor's 3,820; small supernodes run slower), so the estimate is rough, within a factor of two.
 constexpr double kSupernodalEfficiency = 0.25;
 
+// omega^2 at the band's bottom: modes below it do not count toward the N asked for.
+double band_bottom(const EigenOptions& o) {
+  return std::pow(2 * std::numbers::pi * o.min_frequency, 2);
+}
+
 // Block Lanczos with full reorthogonalization on C (symmetric, eigenvalues theta > 0), for the
-// largest theta: all above theta_min, at most `cap` (the first N asked for, or --mode-cap); about
-// `expect` of them (0: unknown) sizes the first basis. Spectra's
-// Lanczos is single-vector; applying C to blocks of vectors turns the triangular solves and the
-// mass product, which dominate, from matrix-vector into matrix-matrix work (about 4x faster here).
+// largest theta: all above theta_min, at most `cap` (the first N asked for, or --mode-cap), and
+// besides those each one above theta_low past the first six (a mode below the band's bottom,
+// beyond the rigid motions `cap` counts); about `expect` of them (0: unknown) sizes the first
+// basis. Spectra's Lanczos is single-vector; applying C to blocks of vectors turns the triangular
+// solves and the mass product, which dominate, from matrix-vector into matrix-matrix work (about
+// 4x faster here).
 struct BlockLanczosResult {
   Eigen::VectorXd theta;  ///< descending
   Eigen::MatrixXd Y;      ///< Ritz vectors (orthonormal)
@@ -61,9 +68,9 @@ struct BlockLanczosResult {
   bool capped = false;  ///< `cap` pairs found and the band goes on
 };
 
-BlockLanczosResult block_lanczos(const SplitShiftInvert& op, double theta_min, Eigen::Index cap,
-                                 Eigen::Index expect, double tol, Eigen::Index max_dim,
-                                 Eigen::Index b,
+BlockLanczosResult block_lanczos(const SplitShiftInvert& op, double theta_min, double theta_low,
+                                 Eigen::Index cap, Eigen::Index expect, double tol,
+                                 Eigen::Index max_dim, Eigen::Index b,
                                  const std::function<void(const std::string&)>& status) {
   const Eigen::Index n = op.rows();
   max_dim = std::min<Eigen::Index>(max_dim, n) / b * b;
@@ -136,9 +143,11 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, double theta_min, E
       const Eigen::VectorXd theta = es.eigenvalues().reverse();
       const Eigen::MatrixXd S = es.eigenvectors().rowwise().reverse();
       const Eigen::VectorXd res = (R * S.bottomRows(b)).colwise().norm();
-      Eigen::Index wanted = 0, done = 0;
+      Eigen::Index wanted = 0, done = 0, below = 0;
+      while (below < k && theta(below) > theta_low) ++below;
+      const Eigen::Index cap_now = cap + std::max<Eigen::Index>(0, below - 6);
       for (Eigen::Index i = 0; i < k; ++i) {
-        if (!(theta(i) >= theta_min && i < cap)) break;
+        if (!(theta(i) >= theta_min && i < cap_now)) break;
         ++wanted;
         done += res(i) <= tol * theta(i);
       }
@@ -147,7 +156,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, double theta_min, E
       // count); and a basis well past the wanted count, so that a multiplet wider than the block
       // has had room to appear.
       const bool bracketed =
-          (wanted == cap || (wanted < k && res(wanted) <= tol * theta(wanted))) &&
+          (wanted == cap_now || (wanted < k && res(wanted) <= tol * theta(wanted))) &&
           k >= wanted + 2 * b;
       if (status && k >= reported + 8 * b) {
         reported = k;
@@ -157,7 +166,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, double theta_min, E
       if ((wanted > 0 && done == wanted && bracketed) || full) {
         out.converged = done == wanted && bracketed;
         out.done = done;
-        out.capped = wanted == cap && wanted < k && theta(wanted) >= theta_min;
+        out.capped = wanted == cap_now && wanted < k && theta(wanted) >= theta_min;
         out.theta = theta.head(wanted);
         if (!out.converged) return out;  // refused by the caller: no Ritz vectors needed
         out.Y.resize(n, wanted);
@@ -237,8 +246,10 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
     // N-th mode lies far above the band (a bar's 100th at 80 kHz), finding them would cost most
     // of the solve.
     const double theta_min = 1.0 / (lambda_max - sigma);
+    const double theta_low =
+        o.modes > 0 && o.min_frequency > 0 ? 1.0 / (band_bottom(o) - sigma) : INFINITY;
     BlockLanczosResult bl =
-        block_lanczos(op, theta_min, o.modes > 0 ? nev : max_nev, o.modes > 0 ? nev : 0,
+        block_lanczos(op, theta_min, theta_low, o.modes > 0 ? nev : max_nev, o.modes > 0 ? nev : 0,
                       o.tolerance, max_dim, o.block, status);
     r.solves = 1;
     r.operations = bl.applied;
@@ -276,7 +287,15 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
       // theta = 1 / (lambda - sigma), largest first: lambda ascending.
       evals = (1.0 / eigs.eigenvalues().array() + sigma).matrix();
       evecs = eigs.eigenvectors();
-      if (o.modes > 0 || evals(evals.size() - 1) >= lambda_max) break;
+      if (o.modes > 0) {  // again with room for the modes below the band, if it had some
+        const auto below = Eigen::Index((evals.array() < band_bottom(o)).count());
+        const Eigen::Index want =
+            std::min(max_nev, Eigen::Index(o.modes) + std::max<Eigen::Index>(6, below));
+        if (want <= nev || evals(evals.size() - 1) >= lambda_max) break;
+        nev = want;
+        continue;
+      }
+      if (evals(evals.size() - 1) >= lambda_max) break;
       if (nev >= max_nev) {
         r.capped = true;
         break;
@@ -364,19 +383,21 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
                      " Hz): the solid is not one well-connected piece (parts joined only at an "
                      "edge or a vertex, or slivers from a poor surface)");
   }
+  std::size_t in_band = 0;  // those at or above min_frequency, which count toward o.modes
   for (Eigen::Index j : elastic) {
     if (evals(j) > lambda_max) {  // none above the band, however many were asked for
       band_ended = true;
       break;
     }
-    if (o.modes > 0 && r.lambda.size() == o.modes) break;
+    if (o.modes > 0 && in_band == o.modes) break;
     if (o.modes == 0 && r.lambda.size() == o.mode_cap) {
       r.capped = true;
       break;
     }
     r.lambda.push_back(evals(j));
+    in_band += evals(j) >= band_bottom(o);
   }
-  if (o.modes > 0 && r.lambda.size() < o.modes && !band_ended)
+  if (o.modes > 0 && in_band < o.modes && !band_ended)
     throw InputError("asked for " + std::to_string(o.modes) + " modes, but the mesh (" +
                      std::to_string(n) + " degrees of freedom) has only " +
                      std::to_string(r.lambda.size()) +

@@ -13,11 +13,15 @@
 namespace chladni::precompute {
 
 struct EigenOptions {
-  /// First N elastic modes, none above max_frequency (block Lanczos; the other methods may
-  /// return some above it); 0: all below max_frequency.
+  /// First N elastic modes in [min_frequency, max_frequency], with those below min_frequency
+  /// before them, none above max_frequency (block Lanczos; the other methods may return some
+  /// above it); 0: all below max_frequency.
   std::size_t modes = 0;
   double max_frequency = 20000;  ///< Hz, undamped: the top of the band
-  std::size_t mode_cap = 2000;   ///< most elastic modes ever computed
+  /// Hz, undamped: modes below it (which precompute drops) do not count toward `modes`, so a
+  /// large object asked for N modes gets N it can hear.
+  double min_frequency = 0;
+  std::size_t mode_cap = 2000;  ///< most elastic modes ever computed
   /// With modes == 0: about how many modes lie below max_frequency (Weyl's law; 0: unknown).
   /// The memory check then counts a Lanczos basis that can hold them.
   std::size_t expected_modes = 0;
