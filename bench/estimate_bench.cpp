@@ -63,6 +63,43 @@ void usage() {
                "usage: chladni_estimate_bench [--modes N] [--recordings DIR] [--json OUT]\n");
 }
 
+// Feature extraction on the bundled recordings: a table row each, and out["features"].
+void feature_rows(const std::string& dir, nlohmann::json& out) {
+  std::printf("%-22s %8s %9s %10s %10s\n", "features of", "seconds", "partials", "explained",
+              "time (s)");
+  for (const char* name : {"glockenspiel_C6", "marimba_C4", "xylophone_C5", "woodblock_C4"}) {
+    const double end = std::strcmp(name, "glockenspiel_C6") ? 0.0 : 0.798;
+    const auto rec = estimate::read_recording(dir + "/" + name + ".wav", {0, end});
+    estimate::FeatureSet set;
+    const double t =
+        timed(5, [&] { set = estimate::extract_features(rec.samples, rec.sample_rate, {}); });
+    std::printf("%-22s %8.3f %9zu %9.1f%% %10.4f\n", name,
+                double(rec.samples.size()) / rec.sample_rate, set.features.size(),
+                100 * set.explained, t);
+    out["features"][name] = {{"seconds", double(rec.samples.size()) / rec.sample_rate},
+                             {"partials", set.features.size()},
+                             {"time_s", t}};
+  }
+}
+
+// A 3 s strike of the N-mode object in a known material (frequencies x s: gamma x s^2), damping
+// `truth`, a 0.3 ms contact, noise 30 dB below the first second's rms.
+std::vector<double> noisy_strike(const estimate::StruckModes& m, double s,
+                                 const DampingModel& truth, double fs) {
+  auto partials = estimate::model_partials(m, s, 1.0, 3e-4, truth, 0.45 * fs);
+  std::vector<estimate::Feature> sines;
+  for (const auto& p : partials)
+    sines.push_back({p.frequency, p.decay, p.amplitude, -0.5 * std::numbers::pi});
+  std::vector<double> x = estimate::synthesize(sines, fs, std::size_t(3 * fs));
+  double rms = 0;
+  for (std::size_t i = 0; i < std::size_t(fs); ++i) rms += x[i] * x[i];
+  rms = std::sqrt(rms / fs);
+  std::mt19937 gen(5);
+  std::normal_distribution<double> noise(0.0, rms * std::pow(10.0, -1.5));
+  for (double& v : x) v += noise(gen);
+  return x;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -81,39 +118,13 @@ int main(int argc, char** argv) {
     }
   }
   nlohmann::json out;
-  std::printf("%-22s %8s %9s %10s %10s\n", "features of", "seconds", "partials", "explained",
-              "time (s)");
-  for (const char* name : {"glockenspiel_C6", "marimba_C4", "xylophone_C5", "woodblock_C4"}) {
-    const double end = std::strcmp(name, "glockenspiel_C6") ? 0.0 : 0.798;
-    const auto rec = estimate::read_recording(dir + "/" + name + ".wav", {0, end});
-    estimate::FeatureSet set;
-    const double t =
-        timed(5, [&] { set = estimate::extract_features(rec.samples, rec.sample_rate, {}); });
-    std::printf("%-22s %8.3f %9zu %9.1f%% %10.4f\n", name,
-                double(rec.samples.size()) / rec.sample_rate, set.features.size(),
-                100 * set.explained, t);
-    out["features"][name] = {{"seconds", double(rec.samples.size()) / rec.sample_rate},
-                             {"partials", set.features.size()},
-                             {"time_s", t}};
-  }
+  feature_rows(dir, out);
 
-  // A 3 s strike of the N-mode object in a known material (frequencies x 0.8: gamma x 0.64),
-  // hybrid damping, a 0.3 ms contact, noise 30 dB below the first second's rms.
   const double fs = 48000;
   const estimate::StruckModes m = object(modes);
   const DampingModel truth{DampingModel::Kind::Hybrid, {1.5, 1e-9, 1e-3, 0.4}};
   const double s_true = 0.8;
-  auto partials = estimate::model_partials(m, s_true, 1.0, 3e-4, truth, 0.45 * fs);
-  std::vector<estimate::Feature> sines;
-  for (const auto& p : partials)
-    sines.push_back({p.frequency, p.decay, p.amplitude, -0.5 * std::numbers::pi});
-  std::vector<double> x = estimate::synthesize(sines, fs, std::size_t(3 * fs));
-  double rms = 0;
-  for (std::size_t i = 0; i < std::size_t(fs); ++i) rms += x[i] * x[i];
-  rms = std::sqrt(rms / fs);
-  std::mt19937 gen(5);
-  std::normal_distribution<double> noise(0.0, rms * std::pow(10.0, -1.5));
-  for (double& v : x) v += noise(gen);
+  const std::vector<double> x = noisy_strike(m, s_true, truth, fs);
 
   estimate::FeatureSet set;
   const double t_features = timed(3, [&] { set = estimate::extract_features(x, fs, {}); });

@@ -240,6 +240,49 @@ TEST(Tetrahedralize, RefineTetsRefinesWhereAskedAndKeepsTheNodes) {
   EXPECT_THROW(refine_tets(t, std::vector<double>(3, 1.0), o), InternalError);
 }
 
+// Every face in one tetrahedron (on the boundary) or in two, oppositely turned; the boundary
+// faces all on the sides of the box `r` fills, enclosing `volume` by the divergence theorem on x.
+void expect_conforming_and_closed(const TetMesh& r, double volume) {
+  std::map<std::array<uint32_t, 3>, std::vector<std::array<uint32_t, 3>>> faces;
+  for (const auto& q : r.tets)
+    for (int skip = 0; skip < 4; ++skip) {
+      // Turned like the tet's boundary (outward): even permutations of the other three.
+      static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
+      std::array<uint32_t, 3> f{q[kFace[skip][0]], q[kFace[skip][1]], q[kFace[skip][2]]}, key = f;
+      std::sort(key.begin(), key.end());
+      faces[key].push_back(f);
+    }
+  std::size_t boundary = 0;
+  for (const auto& [key, list] : faces) {
+    ASSERT_LE(list.size(), 2u);
+    if (list.size() == 1) {
+      ++boundary;
+      continue;
+    }
+    const auto &a = list[0], &b = list[1];  // opposite turns: b is a odd permutation of a
+    const bool same = (a == b) || (a[0] == b[1] && a[1] == b[2] && a[2] == b[0]) ||
+                      (a[0] == b[2] && a[1] == b[0] && a[2] == b[1]);
+    EXPECT_FALSE(same) << "two tetrahedra on the same side of a face";
+  }
+  // A face cut one way on one side and another way on the other would show up as faces of one
+  // tetrahedron inside the box: every face of one must lie on the box's surface.
+  EXPECT_EQ(boundary, r.surface_triangles.size());
+  Vec3 lo = r.nodes[0], hi = r.nodes[0];
+  for (const Vec3& p : r.nodes)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  double div = 0;
+  for (const auto& f : r.surface_triangles) {
+    const Vec3 &a = r.nodes[f[0]], &b = r.nodes[f[1]], &c = r.nodes[f[2]];
+    bool on_side = false;
+    for (int k = 0; k < 3; ++k)
+      for (double side : {lo[k], hi[k]}) on_side |= a[k] == side && b[k] == side && c[k] == side;
+    ASSERT_TRUE(on_side) << "a boundary face inside the box: nodes " << f[0] << " " << f[1] << " "
+                         << f[2];
+    div += (a[0] + b[0] + c[0]) / 3 * cross(sub(b, a), sub(c, a))[0] / 2;
+  }
+  EXPECT_NEAR(div, volume, 1e-12);
+}
+
 // Bisection: each child lies in one tetrahedron of the input (found by its centroid), the
 // children of each input tetrahedron fill it exactly and meet its bound, the mesh is conforming
 // (every face in one tetrahedron on the boundary or in two, oppositely turned) and closed, and
@@ -293,44 +336,7 @@ TEST(Tetrahedralize, BisectTetsMeetsTheBoundsConformingAndKeepsTheNodes) {
   }
   EXPECT_GT(split_unmarked, 0u);                // conformity reaches past the marked region ...
   EXPECT_LT(r.tets.size(), 8 * t.tets.size());  // ... but not over the whole box
-  std::map<std::array<uint32_t, 3>, std::vector<std::array<uint32_t, 3>>> faces;
-  for (const auto& q : r.tets)
-    for (int skip = 0; skip < 4; ++skip) {
-      // Turned like the tet's boundary (outward): even permutations of the other three.
-      static constexpr int kFace[4][3] = {{1, 2, 3}, {0, 3, 2}, {0, 1, 3}, {0, 2, 1}};
-      std::array<uint32_t, 3> f{q[kFace[skip][0]], q[kFace[skip][1]], q[kFace[skip][2]]}, key = f;
-      std::sort(key.begin(), key.end());
-      faces[key].push_back(f);
-    }
-  std::size_t boundary = 0;
-  for (const auto& [key, list] : faces) {
-    ASSERT_LE(list.size(), 2u);
-    if (list.size() == 1) {
-      ++boundary;
-      continue;
-    }
-    const auto &a = list[0], &b = list[1];  // opposite turns: b is a odd permutation of a
-    const bool same = (a == b) || (a[0] == b[1] && a[1] == b[2] && a[2] == b[0]) ||
-                      (a[0] == b[2] && a[1] == b[0] && a[2] == b[1]);
-    EXPECT_FALSE(same) << "two tetrahedra on the same side of a face";
-  }
-  // A face cut one way on one side and another way on the other would show up as faces of one
-  // tetrahedron inside the box: every face of one must lie on the box's surface.
-  EXPECT_EQ(boundary, r.surface_triangles.size());
-  Vec3 lo = r.nodes[0], hi = r.nodes[0];
-  for (const Vec3& p : r.nodes)
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
-  double div = 0;
-  for (const auto& f : r.surface_triangles) {
-    const Vec3 &a = r.nodes[f[0]], &b = r.nodes[f[1]], &c = r.nodes[f[2]];
-    bool on_side = false;
-    for (int k = 0; k < 3; ++k)
-      for (double side : {lo[k], hi[k]}) on_side |= a[k] == side && b[k] == side && c[k] == side;
-    ASSERT_TRUE(on_side) << "a boundary face inside the box: nodes " << f[0] << " " << f[1] << " "
-                         << f[2];
-    div += (a[0] + b[0] + c[0]) / 3 * cross(sub(b, a), sub(c, a))[0] / 2;
-  }
-  EXPECT_NEAR(div, 0.003, 1e-12);
+  expect_conforming_and_closed(r, 0.003);
   EXPECT_GT(tet_quality(r).min_dihedral_deg, 0.5 * tet_quality(t).min_dihedral_deg);
   EXPECT_EQ(bisect_tets(t, std::vector<double>(t.tets.size(), -1.0)).tets.size(), t.tets.size());
   EXPECT_THROW(bisect_tets(t, std::vector<double>(3, 1.0)), InternalError);

@@ -296,16 +296,28 @@ void expect_has(const std::string& msg, const std::string& part) {
 }
 }  // namespace
 
-TEST(PaperFormat, BadInputNamesFileFrameAndProblem) {
-  tools::PaperScenarioOptions o;
-  o.triangles = 50;
-  o.duration = 0.05;
-  const auto s = tools::make_paper_scenario("flap", o);
-  const std::string dir = test::temp_path("paper_bad");
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
-  const std::string json = dir + "/flap.json";
-  write_paper_animation(json, s.animation, PaperFrameStorage::Obj);
+namespace {
+// A small flap animation written to a fresh folder `name` (OBJ frames, or one binary file).
+struct BadInputCase {
+  std::string dir, json;
+  tools::PaperScenario scenario;
+  BadInputCase(const std::string& name, PaperFrameStorage storage) {
+    tools::PaperScenarioOptions o;
+    o.triangles = 50;
+    o.duration = 0.05;
+    scenario = tools::make_paper_scenario("flap", o);
+    dir = test::temp_path(name);
+    std::filesystem::remove_all(dir);
+    std::filesystem::create_directories(dir);
+    json = dir + "/flap.json";
+    write_paper_animation(json, scenario.animation, storage);
+  }
+};
+}  // namespace
+
+TEST(PaperFormat, BadObjFramesNameFileFrameAndProblem) {
+  const BadInputCase c("paper_bad_obj", PaperFrameStorage::Obj);
+  const std::string &dir = c.dir, &json = c.json;
   const std::string frame1 = dir + "/flap/flap_0001.obj";
   std::ifstream in(frame1);
   const std::string good((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
@@ -335,7 +347,11 @@ TEST(PaperFormat, BadInputNamesFileFrameAndProblem) {
   expect_has(msg, "missing frame");
   std::ofstream(frame1) << good;
   EXPECT_EQ(load_error(json), "(accepted)");
+}
 
+TEST(PaperFormat, BadJsonNamesItsPath) {
+  const BadInputCase c("paper_bad_json", PaperFrameStorage::Obj);
+  const std::string &dir = c.dir, &json = c.json;
   // JSON problems name their path.
   auto with = [&](const std::string& from, const std::string& to) {
     std::ifstream j(json);
@@ -358,7 +374,12 @@ TEST(PaperFormat, BadInputNamesFileFrameAndProblem) {
              "frame_rate must lie in [1, 10000]");
   expect_has(with("\"frame_rate\": 60.0", "\"frame_rate\": 60.0, \"frame_rate\": 30"),
              "duplicate key 'frame_rate'");
+}
 
+TEST(PaperFormat, BadBinaryFramesAreRefusedBeforeAllocating) {
+  const BadInputCase c("paper_bad_bin", PaperFrameStorage::Obj);
+  const std::string& dir = c.dir;
+  const auto& s = c.scenario;
   // Binary frames: a flipped byte is a checksum error, a cut file too.
   write_paper_animation(dir + "/bin.json", s.animation, PaperFrameStorage::Binary);
   const std::string bin = dir + "/bin.chpaper";

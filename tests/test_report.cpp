@@ -123,6 +123,83 @@ double changed(const chladni::test::Image& a, const chladni::test::Image& b, int
   return double(n) / (double(w) * h);
 }
 
+// The object covers part of the canvas rectangle in more than a few colours.
+void expect_drawn(const chladni::test::Image& a, int x0, int y0, int w, int h) {
+  std::size_t object = 0;
+  std::set<uint32_t> colours;
+  for (int y = y0 + 2; y < y0 + h - 2; ++y)
+    for (int x = x0 + 2; x < x0 + w - 2; ++x) {
+      const uint8_t* p = a.at(x, y);
+      const bool background =
+          std::abs(p[0] - 240) < 6 && std::abs(p[1] - 242) < 6 && std::abs(p[2] - 245) < 6;
+      object += !background;
+      colours.insert(uint32_t(p[0] >> 3) << 10 | uint32_t(p[1] >> 3) << 5 | uint32_t(p[2] >> 3));
+    }
+  EXPECT_GT(double(object) / (double(w) * h), 0.03) << "the canvas is blank";
+  EXPECT_GT(colours.size(), 20u);
+}
+
+// The runtime's render of the page's strike `s` (a scene: the listener the report used, an
+// impact at t = 0 on that point, into the surface, with the report's impulse and contact time).
+chladni::AudioBuffer render_the_pages_strike(const json& s, const json& data, double seconds) {
+  const chladni::Soundbank bank = chladni::read_soundbank(bar_bank());
+  const std::size_t point = s["point"];
+  if (point >= bank.vertices.size()) {
+    ADD_FAILURE() << "the strike's point " << point << " is no vertex of the bank";
+    return {};
+  }
+  const auto& v = bank.vertices[point];
+  const json scene = {
+      {"sample_rate", int(s["fs"].get<double>())},
+      {"channels", 1},
+      {"duration", seconds},
+      {"listener", {{"position", data["listener"]}, {"forward", {0, 1, 0}}, {"up", {0, 0, 1}}}},
+      {"objects", {{{"name", "bar"}, {"soundbank", bar_bank()}}}},
+      {"events",
+       {{{"time", 0.0},
+         {"type", "impact"},
+         {"object", "bar"},
+         {"impulse", data["strike"]["impulse"]},
+         {"contact_time", data["strike"]["contact_time"]},
+         {"direction", s["direction"]},
+         {"point", {v[0], v[1], v[2]}}}}}};
+  const std::string scene_path = chladni::test::write_temp("report_strike.json", scene.dump());
+  const std::string wav = temp_path("report_strike.wav");
+  const auto r = run_cli("render " + scene_path + " -o " + wav + " --quiet");
+  EXPECT_EQ(r.code, 0) << r.output;
+  return r.code == 0 ? chladni::read_audio(wav) : chladni::AudioBuffer{};
+}
+
+// Spectral peaks of `page` within 30 dB of the loudest are the bank's frequencies within 0.5 %;
+// returns how many there are.
+int expect_peaks_are_modes(const std::vector<float>& page, double fs, const json& data) {
+  std::size_t m = 1;
+  while (m < page.size()) m *= 2;
+  std::vector<float> in(m, 0.0f);
+  for (std::size_t i = 0; i < page.size(); ++i)
+    in[i] = page[i] * float(0.5 - 0.5 * std::cos(2 * std::numbers::pi * (i + 0.5) / page.size()));
+  std::vector<fftwf_complex> out(m / 2 + 1);
+  fftwf_plan plan = fftwf_plan_dft_r2c_1d(int(m), in.data(), out.data(), FFTW_ESTIMATE);
+  fftwf_execute(plan);
+  fftwf_destroy_plan(plan);
+  std::vector<double> db(out.size());
+  for (std::size_t k = 0; k < out.size(); ++k)
+    db[k] = 10 * std::log10(double(out[k][0]) * out[k][0] + double(out[k][1]) * out[k][1] + 1e-30);
+  const double top = *std::max_element(db.begin(), db.end());
+  int peaks = 0;
+  for (std::size_t k = 4; k + 4 < db.size(); ++k) {
+    if (db[k] < top - 30 || *std::max_element(&db[k - 4], &db[k + 5]) > db[k]) continue;
+    const double f =
+        (k + 0.5 * (db[k - 1] - db[k + 1]) / (db[k - 1] - 2 * db[k] + db[k + 1])) * fs / double(m);
+    double nearest = 1e9;
+    for (const auto& mode : data["modes"])
+      nearest = std::min(nearest, std::abs(mode["frequency_hz"].get<double>() / f - 1));
+    EXPECT_LT(nearest, 0.005) << "a peak at " << f << " Hz is no mode of the bank";
+    ++peaks;
+  }
+  return peaks;
+}
+
 TEST(ReportBrowser, DrawsTheModesAndAClickSoundsLikeTheRuntime) {
   const fs::path dir = temp_path("report_browser");
   fs::remove_all(dir);
@@ -142,18 +219,7 @@ TEST(ReportBrowser, DrawsTheModesAndAClickSoundsLikeTheRuntime) {
   const auto a = browser.screenshot();
   ASSERT_GE(a.width, x0 + w);
   ASSERT_GE(a.height, y0 + h);
-  std::size_t object = 0;
-  std::set<uint32_t> colours;
-  for (int y = y0 + 2; y < y0 + h - 2; ++y)
-    for (int x = x0 + 2; x < x0 + w - 2; ++x) {
-      const uint8_t* p = a.at(x, y);
-      const bool background =
-          std::abs(p[0] - 240) < 6 && std::abs(p[1] - 242) < 6 && std::abs(p[2] - 245) < 6;
-      object += !background;
-      colours.insert(uint32_t(p[0] >> 3) << 10 | uint32_t(p[1] >> 3) << 5 | uint32_t(p[2] >> 3));
-    }
-  EXPECT_GT(double(object) / (double(w) * h), 0.03) << "the canvas is blank";
-  EXPECT_GT(colours.size(), 20u);
+  expect_drawn(a, x0, y0, w, h);
   // Another mode (chosen in the selector), another picture; the first again (a click on its
   // table row), the first picture.
   browser.evaluate(
@@ -180,33 +246,11 @@ TEST(ReportBrowser, DrawsTheModesAndAClickSoundsLikeTheRuntime) {
       " else setTimeout(poll, 50); })(); })");
   EXPECT_TRUE(browser.errors().empty()) << browser.errors().front();
 
-  // The runtime renders the same strike (a scene: the listener the report used, an impact at
-  // t = 0 on that point, into the surface, with the report's impulse and contact time).
+  // The runtime renders the same strike.
   const json data = report_data(dir);
   const std::vector<float> page = s["samples"].get<std::vector<float>>();
-  const chladni::Soundbank bank = chladni::read_soundbank(bar_bank());
-  const std::size_t point = s["point"];
-  ASSERT_LT(point, bank.vertices.size());
-  const auto& v = bank.vertices[point];
-  const json scene = {
-      {"sample_rate", int(s["fs"].get<double>())},
-      {"channels", 1},
-      {"duration", double(page.size()) / s["fs"].get<double>()},
-      {"listener", {{"position", data["listener"]}, {"forward", {0, 1, 0}}, {"up", {0, 0, 1}}}},
-      {"objects", {{{"name", "bar"}, {"soundbank", bar_bank()}}}},
-      {"events",
-       {{{"time", 0.0},
-         {"type", "impact"},
-         {"object", "bar"},
-         {"impulse", data["strike"]["impulse"]},
-         {"contact_time", data["strike"]["contact_time"]},
-         {"direction", s["direction"]},
-         {"point", {v[0], v[1], v[2]}}}}}};
-  const std::string scene_path = chladni::test::write_temp("report_strike.json", scene.dump());
-  const std::string wav = temp_path("report_strike.wav");
-  const auto r = run_cli("render " + scene_path + " -o " + wav + " --quiet");
-  ASSERT_EQ(r.code, 0) << r.output;
-  const chladni::AudioBuffer ref = chladni::read_audio(wav);
+  const double fs = s["fs"].get<double>();
+  const chladni::AudioBuffer ref = render_the_pages_strike(s, data, double(page.size()) / fs);
   ASSERT_EQ(ref.channels, 1);
   const std::size_t n = std::min(ref.samples.size(), page.size());
   ASSERT_GT(n, 1000u);
@@ -223,32 +267,7 @@ TEST(ReportBrowser, DrawsTheModesAndAClickSoundsLikeTheRuntime) {
   EXPECT_LT(err, 0.01) << "the page's strike departs from the runtime's render";
 
   // Its spectral peaks (within 30 dB of the loudest) are the bank's frequencies within 0.5 %.
-  const double fs = s["fs"].get<double>();
-  std::size_t m = 1;
-  while (m < page.size()) m *= 2;
-  std::vector<float> in(m, 0.0f);
-  for (std::size_t i = 0; i < page.size(); ++i)
-    in[i] = page[i] * float(0.5 - 0.5 * std::cos(2 * std::numbers::pi * (i + 0.5) / page.size()));
-  std::vector<fftwf_complex> out(m / 2 + 1);
-  fftwf_plan plan = fftwf_plan_dft_r2c_1d(int(m), in.data(), out.data(), FFTW_ESTIMATE);
-  fftwf_execute(plan);
-  fftwf_destroy_plan(plan);
-  std::vector<double> db(out.size());
-  for (std::size_t k = 0; k < out.size(); ++k)
-    db[k] = 10 * std::log10(double(out[k][0]) * out[k][0] + double(out[k][1]) * out[k][1] + 1e-30);
-  const double top = *std::max_element(db.begin(), db.end());
-  int peaks = 0;
-  for (std::size_t k = 4; k + 4 < db.size(); ++k) {
-    if (db[k] < top - 30 || *std::max_element(&db[k - 4], &db[k + 5]) > db[k]) continue;
-    const double f =
-        (k + 0.5 * (db[k - 1] - db[k + 1]) / (db[k - 1] - 2 * db[k] + db[k + 1])) * fs / double(m);
-    double nearest = 1e9;
-    for (const auto& mode : data["modes"])
-      nearest = std::min(nearest, std::abs(mode["frequency_hz"].get<double>() / f - 1));
-    EXPECT_LT(nearest, 0.005) << "a peak at " << f << " Hz is no mode of the bank";
-    ++peaks;
-  }
-  EXPECT_GE(peaks, 2);
+  EXPECT_GE(expect_peaks_are_modes(page, fs, data), 2);
 }
 
 }  // namespace

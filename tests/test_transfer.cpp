@@ -430,10 +430,8 @@ double tone(const AudioBuffer& a, double hz, std::size_t from, std::size_t to) {
   return 2 * std::abs(acc) / wsum;
 }
 
-// A render with transfer: mode A (500 Hz) radiates as a monopole, mode B (900 Hz) as a z-dipole.
-// On the object's z axis both sound; broadside B falls silent; a listener move mid-render and a
-// turned object change the balance accordingly, and distance scales the monopole as 1/r.
-TEST(TransferRender, ListenerAndObjectPoseShapeTheSound) {
+// The probe: mode A (500 Hz) radiates as a monopole, mode B (900 Hz) as a z-dipole.
+ModalModel probe_model() {
   ModalModel model;
   model.name = "probe";
   model.omega = {2 * std::numbers::pi * 500, 2 * std::numbers::pi * 900};
@@ -448,19 +446,11 @@ TEST(TransferRender, ListenerAndObjectPoseShapeTheSound) {
   m.wavenumber = model.omega[1] / 343.0;
   t.add_mode(m, {0, 0, cd(1, 0), 0});
   model.transfer = t;
-  const runtime::ObjectModes obj = runtime::object_modes(model);
-  ASSERT_NE(obj.transfer, nullptr);
+  return model;
+}
 
-  auto render = [&](const Scene& scene, std::size_t map_modes = 4096) {
-    runtime::CpuFilterbankOptions fo;
-    fo.channels = 1;
-    fo.capacity = 1024;
-    fo.threads = 1;
-    runtime::CpuFilterbank fb(fo);
-    runtime::RenderOptions ro;
-    ro.map_gain_modes = map_modes;
-    return runtime::render_scene(scene, {obj}, fb, ro);
-  };
+// One strike of the probe at the origin, 1 s, the listener at `at`.
+Scene probe_scene(const Vec3& at) {
   Scene s;
   s.channels = 1;
   s.duration = 1.0;
@@ -470,61 +460,78 @@ TEST(TransferRender, ListenerAndObjectPoseShapeTheSound) {
   ImpactEvent ev;
   ev.impulse = 1.0;
   s.events = {ev};
-  const std::size_t half = 24000;
+  s.listener.position = at;
+  return s;
+}
 
-  s.listener.position = {0, 0, 1};  // on the dipole's axis
-  const AudioBuffer axis = render(s);
-  s.listener.position = {1, 0, 0};  // broadside
-  const AudioBuffer side = render(s);
-  EXPECT_NEAR(tone(side, 500, 0, half) / tone(axis, 500, 0, half), 1.0, 1e-3);
-  EXPECT_LT(tone(side, 900, 0, half), 1e-3 * tone(axis, 900, 0, half));
-  EXPECT_GT(tone(axis, 900, 0, half), 0.1 * tone(axis, 500, 0, half));
+AudioBuffer render_probe(const Scene& scene, const runtime::ObjectModes& obj,
+                         std::size_t map_modes = 4096) {
+  runtime::CpuFilterbankOptions fo;
+  fo.channels = 1;
+  fo.capacity = 1024;
+  fo.threads = 1;
+  runtime::CpuFilterbank fb(fo);
+  runtime::RenderOptions ro;
+  ro.map_gain_modes = map_modes;
+  return runtime::render_scene(scene, {obj}, fb, ro);
+}
+
+constexpr std::size_t kHalf = 24000;  // samples in half the render
+
+// On the object's z axis both modes sound; broadside the dipole falls silent, exactly and through
+// far-field maps; distance scales the monopole as 1/r.
+TEST(TransferRender, ListenerDirectionAndDistanceShapeTheSound) {
+  const ModalModel model = probe_model();  // object_modes points into it
+  const runtime::ObjectModes obj = runtime::object_modes(model);
+  ASSERT_NE(obj.transfer, nullptr);
+  const AudioBuffer axis = render_probe(probe_scene({0, 0, 1}), obj);
+  const AudioBuffer side = render_probe(probe_scene({1, 0, 0}), obj);
+  EXPECT_NEAR(tone(side, 500, 0, kHalf) / tone(axis, 500, 0, kHalf), 1.0, 1e-3);
+  EXPECT_LT(tone(side, 900, 0, kHalf), 1e-3 * tone(axis, 900, 0, kHalf));
+  EXPECT_GT(tone(axis, 900, 0, kHalf), 0.1 * tone(axis, 500, 0, kHalf));
   // The same through far-field maps (10 R away): the levels and the dipole's null hold.
-  s.listener.position = {0, 0, 1};
-  const AudioBuffer axis_map = render(s, 0);
-  EXPECT_NEAR(tone(axis_map, 500, 0, half) / tone(axis, 500, 0, half), 1.0, 5e-3);
-  EXPECT_NEAR(tone(axis_map, 900, 0, half) / tone(axis, 900, 0, half), 1.0, 5e-3);
-  s.listener.position = {1, 0, 0};
-  const AudioBuffer side_map = render(s, 0);
-  EXPECT_LT(tone(side_map, 900, 0, half), 1e-3 * tone(axis, 900, 0, half));
-  s.listener.position = {0, 0, 1};
+  const AudioBuffer axis_map = render_probe(probe_scene({0, 0, 1}), obj, 0);
+  EXPECT_NEAR(tone(axis_map, 500, 0, kHalf) / tone(axis, 500, 0, kHalf), 1.0, 5e-3);
+  EXPECT_NEAR(tone(axis_map, 900, 0, kHalf) / tone(axis, 900, 0, kHalf), 1.0, 5e-3);
+  const AudioBuffer side_map = render_probe(probe_scene({1, 0, 0}), obj, 0);
+  EXPECT_LT(tone(side_map, 900, 0, kHalf), 1e-3 * tone(axis, 900, 0, kHalf));
+  // Twice as far on the axis: the monopole at half the level.
+  const AudioBuffer far = render_probe(probe_scene({0, 0, 2}), obj);
+  EXPECT_NEAR(tone(far, 500, 0, kHalf) / tone(axis, 500, 0, kHalf), 0.5, 5e-3);
+}
 
-  s.listener.position = {0, 0, 2};  // twice as far on the axis: the monopole at half the level
-  const AudioBuffer far = render(s);
-  EXPECT_NEAR(tone(far, 500, 0, half) / tone(axis, 500, 0, half), 0.5, 5e-3);
-
+// A turned object turns its dipole; a listener move mid-render changes the balance from then on.
+TEST(TransferRender, TurnedObjectAndMovingListenerShapeTheSound) {
+  const ModalModel model = probe_model();  // object_modes points into it
+  const runtime::ObjectModes obj = runtime::object_modes(model);
+  const AudioBuffer axis = render_probe(probe_scene({0, 0, 1}), obj);
   // The object turned 90 degrees about y: its dipole axis now points along world x.
-  s.listener.position = {1, 0, 0};
+  Scene s = probe_scene({1, 0, 0});
   s.objects[0].orientation = {std::cos(std::numbers::pi / 4), 0, std::sin(std::numbers::pi / 4), 0};
-  const AudioBuffer turned = render(s);
-  EXPECT_NEAR(tone(turned, 900, 0, half) / tone(axis, 900, 0, half), 1.0, 1e-3);
+  const AudioBuffer turned = render_probe(s, obj);
+  EXPECT_NEAR(tone(turned, 900, 0, kHalf) / tone(axis, 900, 0, kHalf), 1.0, 1e-3);
 
   // A listener move at 0.5 s from the axis to broadside silences the dipole from there on.
-  s.objects[0].orientation = {1, 0, 0, 0};
-  s.listener.position = {0, 0, 1};
+  s = probe_scene({0, 0, 1});
   MoveEvent mv;
   mv.time = 0.5;
   mv.position = Vec3{1, 0, 0};
   s.moves = {mv};
-  const AudioBuffer moved = render(s);
-  EXPECT_GT(tone(moved, 900, 0, half), 0.5 * tone(axis, 900, 0, half));
-  EXPECT_LT(tone(moved, 900, half, 2 * half), 1e-3 * tone(axis, 900, half, 2 * half));
+  const AudioBuffer moved = render_probe(s, obj);
+  EXPECT_GT(tone(moved, 900, 0, kHalf), 0.5 * tone(axis, 900, 0, kHalf));
+  EXPECT_LT(tone(moved, 900, kHalf, 2 * kHalf), 1e-3 * tone(axis, 900, kHalf, 2 * kHalf));
+}
 
-  // A fit that misses the surface data (held-out error > 1) is not used: that mode falls back to
-  // its compact-source gain over distance, the same in every direction.
+// A fit that misses the surface data (held-out error > 1) is not used: that mode falls back to
+// its compact-source gain over distance, the same in every direction.
+TEST(TransferRender, PoorFitFallsBackToTheCompactSource) {
+  ModalModel model = probe_model();
   model.transfer->modes[1].held_out_error = 2.0f;
   const runtime::ObjectModes fallback = runtime::object_modes(model);
-  runtime::CpuFilterbankOptions fo;
-  fo.channels = 1, fo.capacity = 1024, fo.threads = 1;
-  s.moves.clear();
-  s.listener.position = {1, 0, 0};
-  runtime::CpuFilterbank fb1(fo);
-  const AudioBuffer fb_side = runtime::render_scene(s, {fallback}, fb1, {});
-  s.listener.position = {0, 0, 1};
-  runtime::CpuFilterbank fb2(fo);
-  const AudioBuffer fb_axis = runtime::render_scene(s, {fallback}, fb2, {});
-  EXPECT_GT(tone(fb_side, 900, 0, half), 0.0);
-  EXPECT_NEAR(tone(fb_side, 900, 0, half) / tone(fb_axis, 900, 0, half), 1.0, 1e-3);
+  const AudioBuffer side = render_probe(probe_scene({1, 0, 0}), fallback);
+  const AudioBuffer axis = render_probe(probe_scene({0, 0, 1}), fallback);
+  EXPECT_GT(tone(side, 900, 0, kHalf), 0.0);
+  EXPECT_NEAR(tone(side, 900, 0, kHalf) / tone(axis, 900, 0, kHalf), 1.0, 1e-3);
 }
 
 }  // namespace
