@@ -179,3 +179,23 @@ TEST(CliHostile, TinySolidsGetTheirModesOrAClearRefusal) {
               "--no-transfer");
   EXPECT_EQ(r.code, 0) << r.output;
 }
+
+// Scale the other way. A 200 m bar has 21 modes below 20 Hz: asked for 20, it gets 20 above,
+// the ones below dropped. A 200 km one (a file in micrometres read as metres) has none in the
+// band at all: refused at once, naming the unit, where the shift-invert once crowded its modes
+// (all below a millihertz) together and never converged.
+TEST(CliHostile, HugeSolidsKeepTheModesAskedForOrAreRefusedNamingTheUnit) {
+  const std::string d = inputs().string(), bar = CHLADNI_SOURCE_DIR "/meshes/bar.obj";
+  auto r = run_cli("precompute " + bar + " -o " + d +
+                   "/huge.chbank --scale 1000 --max-modes 20 --no-transfer");
+  ASSERT_EQ(r.code, 0) << r.output;
+  EXPECT_NE(r.output.find("modes kept 20; dropped: 0 overdamped, 21 below 20 Hz"),
+            std::string::npos)
+      << r.output;
+  r = run_cli("precompute " + bar + " -o " + d +
+              "/huger.chbank --scale 1000000 --max-modes 20 --no-transfer");
+  EXPECT_EQ(r.code, 2) << r.output;
+  EXPECT_NE(r.output.find("no mode lies in [20 Hz, 20000 Hz]"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("check --unit/--scale"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(d + "/huger.chbank"));
+}

@@ -55,10 +55,11 @@ double band_bottom(const EigenOptions& o) {
 // Block Lanczos with full reorthogonalization on C (symmetric, eigenvalues theta > 0), for the
 // largest theta: all above theta_min, at most `cap` (the first N asked for, or --mode-cap), and
 // besides those each one above theta_low past the first six (a mode below the band's bottom,
-// beyond the rigid motions `cap` counts); about `expect` of them (0: unknown) sizes the first
-// basis. Spectra's Lanczos is single-vector; applying C to blocks of vectors turns the triangular
-// solves and the mass product, which dominate, from matrix-vector into matrix-matrix work (about
-// 4x faster here).
+// beyond the rigid motions `cap` counts), up to `cap` more: past that the body is likely in the
+// wrong unit (a bar in mm read as metres has millions below 20 Hz), which precompute then says;
+// about `expect` of them (0: unknown) sizes the first basis. Spectra's Lanczos is single-vector;
+// applying C to blocks of vectors turns the triangular solves and the mass product, which dominate,
+// from matrix-vector into matrix-matrix work (about 4x faster here).
 struct BlockLanczosResult {
   Eigen::VectorXd theta;  ///< descending
   Eigen::MatrixXd Y;      ///< Ritz vectors (orthonormal)
@@ -145,7 +146,7 @@ BlockLanczosResult block_lanczos(const SplitShiftInvert& op, double theta_min, d
       const Eigen::VectorXd res = (R * S.bottomRows(b)).colwise().norm();
       Eigen::Index wanted = 0, done = 0, below = 0;
       while (below < k && theta(below) > theta_low) ++below;
-      const Eigen::Index cap_now = cap + std::max<Eigen::Index>(0, below - 6);
+      const Eigen::Index cap_now = cap + std::clamp<Eigen::Index>(below - 6, 0, cap);
       for (Eigen::Index i = 0; i < k; ++i) {
         if (!(theta(i) >= theta_min && i < cap_now)) break;
         ++wanted;
@@ -290,7 +291,8 @@ void iterative_modes(const SparseMatrix& K, const SparseMatrix& M, const EigenOp
       if (o.modes > 0) {  // again with room for the modes below the band, if it had some
         const auto below = Eigen::Index((evals.array() < band_bottom(o)).count());
         const Eigen::Index want =
-            std::min(max_nev, Eigen::Index(o.modes) + std::max<Eigen::Index>(6, below));
+            std::min(max_nev, Eigen::Index(o.modes) +
+                                  std::clamp<Eigen::Index>(below, 6, Eigen::Index(o.modes) + 6));
         if (want <= nev || evals(evals.size() - 1) >= lambda_max) break;
         nev = want;
         continue;
@@ -397,7 +399,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
     r.lambda.push_back(evals(j));
     in_band += evals(j) >= band_bottom(o);
   }
-  if (o.modes > 0 && in_band < o.modes && !band_ended)
+  if (o.modes > 0 && r.lambda.size() < o.modes && !band_ended)
     throw InputError("asked for " + std::to_string(o.modes) + " modes, but the mesh (" +
                      std::to_string(n) + " degrees of freedom) has only " +
                      std::to_string(r.lambda.size()) +
