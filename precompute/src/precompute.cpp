@@ -43,13 +43,9 @@ namespace {
 // and a 200 km beam's, at 0.6 mHz, never converged under 20 Hz. A free body's lowest mode lies
 // above about a hundredth of c_shear / L except for slender or thin ones, whose modes still
 // converge within a few hundred times the shift (a 170 m cow's 4.4 Hz under 20 Hz does).
-double shift_for(const Material& m, const SurfaceMesh& s) {
+double shift_for(const Material& m, const MeshReport& mesh) {
   double extent = 0;
-  for (int k = 0; k < 3; ++k) {
-    double lo = INFINITY, hi = -INFINITY;
-    for (const Vec3& v : s.vertices) lo = std::min(lo, v[k]), hi = std::max(hi, v[k]);
-    extent = std::max(extent, hi - lo);
-  }
+  for (int k = 0; k < 3; ++k) extent = std::max(extent, mesh.bbox_max[k] - mesh.bbox_min[k]);
   const double scaled = 0.01 * m.shear_speed() / extent;
   return std::isfinite(scaled) && scaled > 0 ? std::min(EigenOptions{}.shift_hz, scaled)
                                              : EigenOptions{}.shift_hz;
@@ -254,7 +250,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
   eo.modes = o.max_modes;
   eo.max_frequency = o.max_frequency;
   eo.min_frequency = o.min_frequency;
-  eo.shift_hz = shift_for(o.material, surface);
+  eo.shift_hz = shift_for(o.material, r.mesh);
   eo.mode_cap = o.mode_cap;
   eo.method = o.eigensolver;
   eo.max_memory = o.max_memory < 0 ? default_memory_budget() : o.max_memory;

@@ -332,6 +332,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
     throw InputError("max frequency and shift must be > 0");
   const double two_pi = 2 * std::numbers::pi;
   const double lambda_max = std::pow(two_pi * o.max_frequency, 2);
+  const double lambda_min = band_bottom(o);
 
   EigenResult r;
   Eigen::VectorXd evals;
@@ -397,7 +398,7 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
       break;
     }
     r.lambda.push_back(evals(j));
-    in_band += evals(j) >= band_bottom(o);
+    in_band += evals(j) >= lambda_min;
   }
   if (o.modes > 0 && r.lambda.size() < o.modes && !band_ended)
     throw InputError("asked for " + std::to_string(o.modes) + " modes, but the mesh (" +
