@@ -113,6 +113,29 @@ void print_transfer(const Transfer& t) {
         bem);
 }
 
+// What --repair did (META "repair"), one line; a field missing from an older bank reads as 0.
+void print_repair(const nlohmann::json& r) {
+  auto num = [&](const nlohmann::json& j, const char* k) {
+    return j.contains(k) && j[k].is_number() ? j[k].get<double>() : 0.0;
+  };
+  const std::string rung =
+      r.contains("rung") && r["rung"].is_string() ? r["rung"].get<std::string>() : "?";
+  std::printf("repair    %s", rung.c_str());
+  if (r.contains("wrap") && r["wrap"].is_object())
+    std::printf(" (alpha %.3g mm, offset %.3g mm)", 1e3 * num(r["wrap"], "alpha_m"),
+                1e3 * num(r["wrap"], "offset_m"));
+  if (rung != "none") {
+    const double size = num(r, "size_m");
+    std::printf(
+        ": surface moved up to %.3g mm (%.2f %% of its size; input to repaired %.3g mm, "
+        "repaired to input %.3g mm), volume %+.2f %%",
+        1e3 * num(r, "hausdorff_m"), size > 0 ? 100 * num(r, "hausdorff_m") / size : 0.0,
+        1e3 * num(r, "input_to_repaired_m"), 1e3 * num(r, "repaired_to_input_m"),
+        100 * num(r, "volume_change"));
+  }
+  std::printf("\n");
+}
+
 void print_summary(const std::string& path, const Soundbank& b, const nlohmann::json& meta,
                    bool have_ferr) {
   std::printf("soundbank %s (format %u.%u)\n", path.c_str(), Soundbank::kVersionMajor,
@@ -126,9 +149,11 @@ void print_summary(const std::string& path, const Soundbank& b, const nlohmann::
     print_transfer(*b.transfer);
   else
     std::printf("transfer  none (listener gains use a compact-source estimate)\n");
+  if (meta.is_object() && meta.contains("repair") && meta["repair"].is_object())
+    print_repair(meta["repair"]);
   if (meta.is_object())
     for (const auto& [k, v] : meta.items())
-      if (k != "frequency_error_estimate" || !have_ferr)
+      if ((k != "frequency_error_estimate" || !have_ferr) && k != "repair")
         std::printf("meta      %s: %s\n", k.c_str(), v.dump().c_str());
   if (have_ferr)
     std::printf(

@@ -32,11 +32,19 @@ struct PrecomputeArgs {
   std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000, max_surface_triangles = 20000;
   std::string eigensolver = "block", transfer_backend = "auto", transfer_method = "auto";
   bool repair = false, quiet = false, no_transfer = false;
+  double repair_alpha = 0, repair_offset = 0, repair_max_distance = 0.10,
+         repair_max_volume_change = 0.10;
   std::string batch_stamp;
   int transfer_order = 0;
   std::size_t transfer_max_sources = 1024;
   double sound_speed = 343.0, air_density = 1.204;
 };
+
+// What --repair did, as recorded in the soundbank's META.
+nlohmann::json repair_meta(const Soundbank& bank) {
+  const auto meta = nlohmann::json::parse(bank.metadata_json, nullptr, false);
+  return meta.is_object() && meta.contains("repair") ? meta["repair"] : nlohmann::json();
+}
 
 nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::PrecomputeReport& r,
                             const Soundbank& bank) {
@@ -52,7 +60,8 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
       {"vertices", r.mesh.vertices},          {"triangles", r.mesh.triangles},
       {"volume_m3", r.mesh.volume},           {"cavities", r.mesh.cavities},
       {"simplified_from", r.simplified_from}, {"simplify_envelope_m", r.simplify_envelope}};
-  j["repairs"] = r.repairs;
+  j["repairs"] = r.repair.log;
+  if (a.repair) j["repair"] = repair_meta(bank);
   j["volume_mesh"] = {{"tetrahedra", r.tets},
                       {"nodes", r.nodes},
                       {"dofs", r.dofs},
@@ -126,6 +135,10 @@ precompute::PrecomputeOptions precompute_options(const PrecomputeArgs& a) {
   o.repair = a.repair;
   o.save_surface = a.save_surface;
   o.repair_options.max_hole_edges = a.max_hole_edges;
+  o.repair_options.wrap_alpha = a.repair_alpha;
+  o.repair_options.wrap_offset = a.repair_offset;
+  o.repair_options.max_distance = a.repair_max_distance;
+  o.repair_options.max_volume_change = a.repair_max_volume_change;
   o.material = find_material(a.material);
   if (!std::isnan(a.E) || !std::isnan(a.nu) || !std::isnan(a.rho))
     o.material.name = a.material + " (modified)";
@@ -180,7 +193,15 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
   if (r.mesh.cavities)  // hollow: the cavities' faces are meshed, not put in the soundbank
     std::printf(", hollow (%zu %s)", r.mesh.cavities, r.mesh.cavities == 1 ? "cavity" : "cavities");
   std::printf("\n");
-  for (const auto& line : r.repairs) std::printf("  repaired: %s\n", line.c_str());
+  for (const auto& line : r.repair.log) std::printf("  repaired: %s\n", line.c_str());
+  if (a.repair && r.repair.changed())
+    std::printf(
+        "  repair (%s): the surface moved up to %.3g mm (%.2f %% of its %.3g m size); "
+        "volume %.4g -> %.4g m^3 (%+.2f %%%s)\n",
+        precompute::to_string(r.repair.rung), r.repair.hausdorff * 1e3,
+        100 * r.repair.hausdorff / r.repair.size, r.repair.size, r.repair.volume_input,
+        r.repair.volume_repaired, 100 * r.repair.volume_change(),
+        r.repair.input_closed ? "" : "; the input's volume estimated across its holes");
   std::printf("material %s: E %.4g Pa, nu %.3g, rho %.4g kg/m^3, damping %s\n",
               bank.material.name.c_str(), bank.material.youngs_modulus, bank.material.poisson_ratio,
               bank.material.density, bank.material.damping.to_string().c_str());
@@ -273,6 +294,33 @@ void add_input_options(CLI::App* cmd, PrecomputeArgs* a) {
   cmd->add_option("--mass", a->mass, "Mass matrix: consistent or lumped")->capture_default_str();
 }
 
+// The repair ladder (docs/repair.md) and its limits.
+void add_repair_options(CLI::App* cmd, PrecomputeArgs* a) {
+  cmd->add_flag("--repair", a->repair,
+                "Repair a mesh that is not a valid solid: local fixes, self-intersection removal, "
+                "else an alpha wrap; reports how far the surface moved (docs/repair.md)");
+  cmd->add_option("--max-hole-edges", a->max_hole_edges,
+                  "--repair fills holes up to this many edges")
+      ->check(CLI::Range(3, 1000000))
+      ->capture_default_str();
+  cmd->add_option("--repair-alpha", a->repair_alpha,
+                  "The wrap's ball radius (m, after --unit/--scale): gaps and holes narrower "
+                  "close (0: the thinnest wall)")
+      ->check(finite_in(0, 1e6));
+  cmd->add_option("--repair-offset", a->repair_offset,
+                  "How far outside the input the wrap lies (m; 0: a hundredth of the thinnest "
+                  "wall)")
+      ->check(finite_in(0, 1e6));
+  cmd->add_option("--repair-max-distance", a->repair_max_distance,
+                  "Refuse a wrap that moves the surface further than this fraction of its size")
+      ->check(finite_in(1e-6, 1))
+      ->capture_default_str();
+  cmd->add_option("--repair-max-volume-change", a->repair_max_volume_change,
+                  "Refuse a wrap that changes the volume by more than this fraction")
+      ->check(finite_in(1e-6, 10))
+      ->capture_default_str();
+}
+
 // What to compute, how accurately, within what memory; checking and repairing the surface.
 void add_solver_options(CLI::App* cmd, PrecomputeArgs* a) {
   cmd->add_option("--max-modes", a->max_modes,
@@ -321,13 +369,9 @@ void add_solver_options(CLI::App* cmd, PrecomputeArgs* a) {
   cmd->add_option("--eigensolver", a->eigensolver,
                   "block (block Lanczos, default) or spectra (Spectra's Lanczos), same operator")
       ->capture_default_str();
-  cmd->add_flag("--repair", a->repair, "Try CGAL's standard repairs on a bad mesh and report them");
+  add_repair_options(cmd, a);
   cmd->add_option("--save-surface", a->save_surface,
                   "Write the checked (repaired, simplified) surface, the one meshed, as OBJ");
-  cmd->add_option("--max-hole-edges", a->max_hole_edges,
-                  "--repair fills holes up to this many edges")
-      ->check(CLI::Range(3, 1000000))
-      ->capture_default_str();
   cmd->add_option("--threads", a->threads, "Assembly threads (0: all cores)")
       ->check(thread_count())
       ->capture_default_str();

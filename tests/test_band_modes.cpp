@@ -41,13 +41,23 @@ TEST(LocalThickness, IsAWallsThicknessAndASolidsChord) {
   for (double x : c) EXPECT_NEAR(x, 0.1, 0.015);
 }
 
-// Not a closed polygon mesh: nothing measured, no error (the count falls back on 2V/S).
-TEST(LocalThickness, AnOpenSurfaceMeasuresNothing) {
-  SurfaceMesh open = test::box_surface({0.1, 0.1, 0.1}, {1, 1, 1});
+// An open surface (as the repair ladder measures one before wrapping it): measured where the
+// rays come back, without error; a non-manifold one measures nothing.
+TEST(LocalThickness, AnOpenSurfaceIsMeasuredWhereRaysComeBack) {
+  SurfaceMesh open = test::box_surface({0.1, 0.1, 0.1}, {3, 3, 3});
   open.triangles.pop_back();
   const std::vector<double> t = local_thickness(open);
   ASSERT_EQ(t.size(), open.triangles.size());
-  EXPECT_EQ(std::accumulate(t.begin(), t.end(), 0.0), 0.0);
+  std::size_t measured = 0;
+  for (double x : t)
+    if (x > 0) {
+      EXPECT_NEAR(x, 0.1, 0.015);
+      ++measured;
+    }
+  EXPECT_GT(measured, t.size() / 2);
+  open.triangles.push_back(open.triangles.front());  // a face twice: not a polygon mesh
+  const std::vector<double> none = local_thickness(open);
+  EXPECT_EQ(std::accumulate(none.begin(), none.end(), 0.0), 0.0);
 }
 
 // A block with a thin fin, all modes below 12 kHz: the estimate made before meshing is within

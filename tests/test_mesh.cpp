@@ -9,6 +9,7 @@
 #include <set>
 
 #include "chladni/core/error.hpp"
+#include "chladni/precompute/mesh_repair.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
 #include "fem_fixtures.hpp"
@@ -120,7 +121,7 @@ TEST(MeshCheck, OrientationManifoldnessAndDegeneracyProblemsAreNamed) {
 TEST(MeshRepair, FixesOrientationAndReportsIt) {
   SurfaceMesh m = cube();
   for (auto& t : m.triangles) std::swap(t[1], t[2]);
-  const auto log = repair_mesh(m);
+  const auto log = repair_mesh(m).log;
   EXPECT_TRUE(check_mesh(m).ok()) << message_of(m);
   ASSERT_FALSE(log.empty());
   EXPECT_NE(log.back().find("reversed"), std::string::npos);
@@ -135,7 +136,7 @@ TEST(MeshRepair, StitchesDuplicatedVertices) {
     m.triangles.push_back({base, base + 1, base + 2});
   }
   EXPECT_EQ(check_mesh(m).boundary_edges, 36u);
-  const auto log = repair_mesh(m);
+  const auto log = repair_mesh(m).log;
   EXPECT_TRUE(check_mesh(m).ok()) << message_of(m);
   EXPECT_EQ(m.vertices.size(), 8u);
 }
@@ -143,7 +144,7 @@ TEST(MeshRepair, StitchesDuplicatedVertices) {
 TEST(MeshRepair, BrokenSampleMeshesBecomeValidSolids) {
   for (const char* name : {"elephant_with_holes.obj", "teapot_solid_selfintersecting.obj"}) {
     SurfaceMesh m = read_mesh(kMeshes + std::string("/broken/") + name);
-    const auto log = repair_mesh(m);
+    const auto log = repair_mesh(m).log;
     EXPECT_FALSE(log.empty()) << name;
     const MeshReport r = check_mesh(m);
     EXPECT_TRUE(r.ok()) << name << ": " << message_of(m);

@@ -10,6 +10,7 @@
 #include <numbers>
 
 #include "chladni/core/material.hpp"
+#include "chladni/precompute/mesh_repair.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
@@ -66,34 +67,31 @@ TEST(HollowBody, MisplacedPiecesAreNamedAndRepaired) {
                                 ") inside the solid wound outward"),
             std::string::npos)
       << problems_of(m);
-  std::vector<std::string> log = repair_mesh(m);
+  std::vector<std::string> log = repair_mesh(m).log;
   EXPECT_TRUE(logged(log, "reversed the faces of a cavity to point into it"));
   EXPECT_TRUE(check_mesh(m).ok()) << problems_of(m);
   EXPECT_EQ(check_mesh(m).cavities, 1u);
 
-  // A ball loose in the cavity is a separate asset: named, and removed by repair, which keeps
-  // the cavity.
+  // A ball loose in the cavity is a separate asset: named, and refused by repair with the two
+  // parts (the cavity is not a part).
   m = test::with_piece(test::hollow_sphere(kR, kWall, 2), test::icosphere(0.03, 1), false);
   EXPECT_NE(problems_of(m).find("1 piece (the piece of face " + std::to_string(2 * n) +
                                 ") lying loose inside a cavity"),
             std::string::npos)
       << problems_of(m);
-  log = repair_mesh(m);
-  EXPECT_TRUE(logged(log,
-                     "removed 1 separate pieces (80 triangles), keeping the largest and the "
-                     "cavity inside it"));
-  EXPECT_TRUE(check_mesh(m).ok()) << problems_of(m);
-  EXPECT_EQ(check_mesh(m).cavities, 1u);
+  RepairReport r = repair_mesh(m);
+  EXPECT_NE(r.refusal.find("2 separate parts that do not touch"), std::string::npos) << r.refusal;
 
-  // Two balls side by side stay two pieces, however each is wound.
+  // Two balls side by side stay two parts, however each is wound: refused, each listed.
   SurfaceMesh apart = test::icosphere(0.05, 1);
   for (Vec3& v : apart.vertices) v[0] += 0.3;
   m = test::with_piece(outer, apart, true);
   EXPECT_NE(problems_of(m).find("2 separate pieces"), std::string::npos) << problems_of(m);
-  log = repair_mesh(m);
-  EXPECT_TRUE(check_mesh(m).ok()) << problems_of(m);
-  EXPECT_EQ(check_mesh(m).cavities, 0u);
-  EXPECT_EQ(m.triangles.size(), n);
+  r = repair_mesh(m);
+  EXPECT_NE(r.refusal.find("2 separate parts that do not touch"), std::string::npos) << r.refusal;
+  EXPECT_NE(r.refusal.find("part 2 (the piece of face " + std::to_string(n) + "): 80 triangles"),
+            std::string::npos)
+      << r.refusal;
 }
 
 TEST(HollowBody, TetrahedraFillTheWallAndNotTheCavity) {

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 #include <numbers>
 #include <optional>
@@ -37,6 +38,12 @@ std::vector<std::array<float, 3>> vertex_normals(const SurfaceMesh& m) {
 }
 
 namespace {
+
+std::string fmt_g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.4g", x);
+  return buf;
+}
 
 // The shift-invert's shift (Hz): 20 Hz, or below a large body's lowest modes. Shift-invert
 // crowds modes far below the shift together (theta = 1 / (lambda - sigma) tends to -1 / sigma),
@@ -169,6 +176,25 @@ void add_transfer(Soundbank& bank, const SurfaceMesh& surface, double max_memory
     r.max_held_out = std::max(r.max_held_out, double(m.held_out_error));
 }
 
+// What --repair did and how far it moved the surface (docs/repair.md), rounded for reading.
+nlohmann::json repair_json(const RepairReport& r) {
+  auto round = [](double x) { return std::isfinite(x) ? std::stod(fmt_g(x)) : -1.0; };
+  nlohmann::json j = {{"rung", to_string(r.rung)},
+                      {"size_m", round(r.size)},
+                      {"hausdorff_m", round(r.hausdorff)},
+                      {"input_to_repaired_m", round(r.to_repaired)},
+                      {"repaired_to_input_m", round(r.to_input)},
+                      {"volume_input_m3", round(r.volume_input)},
+                      {"volume_repaired_m3", round(r.volume_repaired)},
+                      {"volume_change", round(r.volume_change())},
+                      {"input_closed", r.input_closed}};
+  if (r.rung == RepairRung::Wrap)
+    j["wrap"] = {{"alpha_m", round(r.alpha)},
+                 {"offset_m", round(r.offset)},
+                 {"thinnest_wall_m", round(r.thinnest)}};
+  return j;
+}
+
 // The soundbank's META section: how it was made, for `chladni info` and the batch's stamp.
 std::string metadata(const Soundbank& bank, const std::string& origin, const PrecomputeOptions& o,
                      const PrecomputeReport& r) {
@@ -194,7 +220,8 @@ std::string metadata(const Soundbank& bank, const std::string& origin, const Pre
   meta["factorization"] = r.eigen.factorization;
   meta["modes_dropped"] = {
       {"overdamped", r.overdamped}, {"below_band", r.below_band}, {"above_band", r.above_band}};
-  meta["repairs"] = r.repairs;
+  meta["repairs"] = r.repair.log;
+  if (o.repair) meta["repair"] = repair_json(r.repair);
   if (r.simplified_from)  // the bank's surface is not the file's: strikes go by position
     meta["surface_simplified"] = {{"from_triangles", r.simplified_from},
                                   {"envelope_m", r.simplify_envelope}};
@@ -236,9 +263,11 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
 
   sw.start("check surface");
   if (o.repair) {
-    r.repairs = repair_mesh(surface, o.repair_options);
+    r.repair = repair_mesh(surface, o.repair_options);
     if (p.note)
-      for (const auto& line : r.repairs) p.note("repair: " + line);
+      for (const auto& line : r.repair.log) p.note("repair: " + line);
+    if (!r.repair.refusal.empty())
+      throw InputError(origin + ": --repair cannot make a valid solid of it: " + r.repair.refusal);
   }
   r.mesh = check_mesh(surface);
   if (!o.save_surface.empty()) write_obj(o.save_surface, surface);

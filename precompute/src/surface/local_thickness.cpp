@@ -18,8 +18,11 @@ constexpr std::size_t kRays = 9;
 
 std::vector<double> local_thickness(const SurfaceMesh& surface) {
   std::vector<double> thickness(surface.triangles.size(), 0.0);
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  const auto polygons = cgal_surface::to_polygons(surface);
+  if (!PMP::is_polygon_soup_a_polygon_mesh(polygons)) return thickness;
   Mesh mesh;
-  if (!cgal_surface::to_closed_mesh(surface, mesh)) return thickness;
+  PMP::polygon_soup_to_polygon_mesh(cgal_surface::to_points(surface), polygons, mesh);
   auto sdf = mesh.add_property_map<Mesh::Face_index, double>("f:sdf", 0.0).first;
   CGAL::sdf_values(mesh, sdf, kConeAngle, kRays, false);
   for (Mesh::Face_index f : mesh.faces())  // faces are created in soup order

@@ -9,8 +9,8 @@ namespace chladni::precompute {
 
 /// Per triangle: the shape diameter function (Shapira, Shamir & Cohen-Or 2008, CGAL's
 /// sdf_values), the robust mean length of rays cast inward in a narrow cone about the inward
-/// normal: a wall's thickness, a solid's chord. 0 where no ray came back; all 0 when the surface
-/// is not a closed polygon mesh.
+/// normal: a wall's thickness, a solid's chord. 0 where no ray came back (through a hole of an
+/// open surface); all 0 when the surface is not a polygon mesh (non-manifold).
 std::vector<double> local_thickness(const SurfaceMesh& surface);
 
 }  // namespace chladni::precompute

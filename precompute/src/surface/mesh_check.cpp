@@ -1,18 +1,7 @@
-// Surface checks and repairs with CGAL Polygon Mesh Processing (one of the two CGAL units).
+// Surface checks with CGAL Polygon Mesh Processing (predicates and self-intersection tests).
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_mesh_processing/border.h>
-#include <CGAL/Polygon_mesh_processing/connected_components.h>
-#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
-#include <CGAL/Polygon_mesh_processing/orientation.h>
-#include <CGAL/Polygon_mesh_processing/polygon_mesh_to_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
-#include <CGAL/Polygon_mesh_processing/remesh.h>
-#include <CGAL/Polygon_mesh_processing/repair.h>
-#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
-#include <CGAL/Polygon_mesh_processing/repair_self_intersections.h>
 #include <CGAL/Polygon_mesh_processing/self_intersections.h>
-#include <CGAL/Polygon_mesh_processing/stitch_borders.h>
-#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 
 #include <cmath>
@@ -69,55 +58,13 @@ void classify_pieces(const SurfaceMesh& m, MeshReport& r) {
   }
 }
 
-// Keeps the piece of most triangles and the cavities directly inside it.
-template <class Say>
-void keep_largest_solid(SurfaceMesh& m, Say say) {
-  const SurfacePieces s = surface_pieces(m);
-  if (s.count() < 2) return;
-  std::size_t main = s.count();
-  for (std::size_t p = 0; p < s.count(); ++p)
-    if ((!s.nested() || s.depth[p] == 0) &&
-        (main == s.count() || s.triangles[p] > s.triangles[main]))
-      main = p;
-  std::vector<bool> keep(s.count(), false);
-  std::size_t dropped = 0, dropped_faces = 0, cavities = 0;
-  for (std::size_t p = 0; p < s.count(); ++p) {
-    keep[p] = p == main || (s.nested() && s.depth[p] == 1 && s.parent[p] == int(main));
-    cavities += keep[p] && p != main;
-    if (!keep[p]) ++dropped, dropped_faces += s.triangles[p];
-  }
-  if (!dropped) return;
-  m = keep_pieces(m, s, keep);
-  say("removed " + std::to_string(dropped) + " separate pieces (" + std::to_string(dropped_faces) +
-      " triangles), keeping the largest" +
-      (cavities == 1 ? " and the cavity inside it"
-       : cavities    ? " and the " + std::to_string(cavities) + " cavities inside it"
-                     : ""));
-}
-
-// Winds each piece of a closed surface to bound the solid: outer pieces outward, cavities (odd
-// nesting depth) into themselves.
-template <class Say>
-void orient_pieces(SurfaceMesh& m, Say say) {
-  const SurfacePieces s = surface_pieces(m);
-  if (s.count() > 1 && !s.nested()) return;
-  std::vector<bool> flip(s.count(), false);
-  std::size_t outer = 0, inner = 0;
-  for (std::size_t p = 0; p < s.count(); ++p) {
-    const bool odd = s.count() > 1 && s.depth[p] % 2 == 1;
-    flip[p] = odd ? s.volume[p] > 0 : s.volume[p] < 0;
-    if (flip[p]) ++(odd ? inner : outer);
-  }
-  for (std::size_t f = 0; f < m.triangles.size(); ++f)
-    if (flip[s.of_triangle[f]]) std::swap(m.triangles[f][1], m.triangles[f][2]);
-  if (outer) say("reversed all faces to point outward");
-  if (inner)
-    say("reversed the faces of " + (inner == 1
-                                        ? std::string("a cavity to point into it")
-                                        : std::to_string(inner) + " cavities to point into them"));
-}
-
 }  // namespace
+
+bool MeshReport::encloses_no_volume() const {
+  double diag2 = 0;
+  for (int k = 0; k < 3; ++k) diag2 += (bbox_max[k] - bbox_min[k]) * (bbox_max[k] - bbox_min[k]);
+  return std::abs(volume) <= 1e-9 * diag2 * std::sqrt(diag2);
+}
 
 std::vector<std::string> MeshReport::problems() const {
   std::vector<std::string> out;
@@ -174,7 +121,11 @@ std::vector<std::string> MeshReport::problems() const {
                   " lying loose inside a cavity: make each solid a separate asset");
   if (topology_ok && !(volume > 0)) {
     std::ostringstream os;
-    os << "signed volume " << volume << " m^3 is not positive (faces wound inward)";
+    if (encloses_no_volume())
+      os << "encloses no volume (signed volume " << volume
+         << " m^3): a flat or open sheet, not a solid";
+    else
+      os << "signed volume " << volume << " m^3 is not positive (faces wound inward)";
     out.push_back(os.str());
   }
   return out;
@@ -291,116 +242,6 @@ void require_valid(const MeshReport& report, const std::string& origin, bool aft
   for (const std::string& p : problems) msg += "\n  - " + p;
   if (!after_repair) msg += "\n  (try --repair; indices are 0-based)";
   throw InputError(msg);
-}
-
-namespace {
-
-// Fills holes bounded by at most `max_edges` edges (one representative halfedge per cycle).
-template <class Say>
-void fill_holes(Mesh& mesh, std::size_t max_edges, Say say) {
-  std::vector<Mesh::Halfedge_index> borders;
-  PMP::extract_boundary_cycles(mesh, std::back_inserter(borders));
-  std::size_t filled = 0, left = 0, hole_faces = 0;
-  for (auto h : borders) {
-    std::size_t len = 0;
-    for (auto hh : CGAL::halfedges_around_face(h, mesh)) (void)hh, ++len;
-    if (len > max_edges) {
-      ++left;
-      continue;
-    }
-    std::vector<Mesh::Face_index> added;
-    PMP::triangulate_and_refine_hole(mesh, h, std::back_inserter(added), CGAL::Emptyset_iterator());
-    hole_faces += added.size();
-    ++filled;
-  }
-  if (filled)
-    say("filled " + std::to_string(filled) + " holes with " + std::to_string(hole_faces) +
-        " triangles");
-  if (left)
-    say("left " + std::to_string(left) + " holes larger than " + std::to_string(max_edges) +
-        " edges open");
-}
-
-// Needle and sliver triangles (typical after hole filling and self-intersection removal) force
-// sliver tetrahedra; the surface is remeshed isotropically at its mean edge length when any are
-// left.
-template <class Say>
-void remesh_slivers(Mesh& mesh, double min_angle_deg, Say say) {
-  double min_angle = 180, edge_sum = 0;
-  for (auto f : mesh.faces()) {
-    Point p[3];
-    int k = 0;
-    for (auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) p[k++] = mesh.point(v);
-    for (int c = 0; c < 3; ++c) {
-      const auto u = p[(c + 1) % 3] - p[c], w = p[(c + 2) % 3] - p[c];
-      const double cosang = u * w / std::sqrt(u.squared_length() * w.squared_length());
-      min_angle = std::min(min_angle, std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / M_PI);
-      edge_sum += std::sqrt(u.squared_length());
-    }
-  }
-  if (min_angle < min_angle_deg && CGAL::is_closed(mesh)) {
-    const double target = edge_sum / (3.0 * mesh.number_of_faces());
-    const std::size_t before = mesh.number_of_faces();
-    PMP::isotropic_remeshing(faces(mesh), target, mesh, CGAL::parameters::number_of_iterations(3));
-    mesh.collect_garbage();
-    char buf[160];
-    std::snprintf(
-        buf, sizeof buf,
-        "remeshed the surface isotropically (smallest angle %.2f deg; edge %.3g m): %zu -> "
-        "%zu triangles",
-        min_angle, target, before, std::size_t(mesh.number_of_faces()));
-    say(buf);
-  }
-}
-
-}  // namespace
-
-std::vector<std::string> repair_mesh(SurfaceMesh& m, const RepairOptions& options) {
-  std::vector<std::string> log;
-  auto say = [&](const std::string& s) { log.push_back(s); };
-  std::vector<Point> points = to_points(m);
-  std::vector<std::vector<std::size_t>> polys = to_polygons(m);
-  const std::size_t v0 = points.size(), f0 = polys.size();
-
-  PMP::repair_polygon_soup(points, polys);
-  if (points.size() != v0 || polys.size() != f0)
-    say("merged duplicate vertices and dropped degenerate or duplicate triangles: " +
-        std::to_string(v0) + " -> " + std::to_string(points.size()) + " vertices, " +
-        std::to_string(f0) + " -> " + std::to_string(polys.size()) + " triangles");
-  const std::size_t v1 = points.size();
-  if (!PMP::orient_polygon_soup(points, polys))
-    say("oriented the triangles consistently; " + std::to_string(points.size() - v1) +
-        " non-manifold vertices were split");
-  Mesh mesh;
-  PMP::polygon_soup_to_polygon_mesh(points, polys, mesh);
-
-  if (const std::size_t n = PMP::stitch_borders(mesh))
-    say("stitched " + std::to_string(n) + " pairs of coincident border edges");
-  const std::size_t faces_before = mesh.number_of_faces();
-  PMP::remove_degenerate_faces(mesh);
-  mesh.collect_garbage();
-  if (mesh.number_of_faces() != faces_before)
-    say("removed " + std::to_string(faces_before - mesh.number_of_faces()) + " degenerate faces");
-
-  fill_holes(mesh, options.max_hole_edges, say);
-
-  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
-  PMP::self_intersections(mesh, std::back_inserter(pairs));
-  if (!pairs.empty()) {
-    const bool cleaned =
-        PMP::experimental::remove_self_intersections(mesh, CGAL::parameters::preserve_genus(false));
-    mesh.collect_garbage();
-    std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> after;
-    PMP::self_intersections(mesh, std::back_inserter(after));
-    say("self-intersections: " + std::to_string(pairs.size()) + " face pairs -> " +
-        std::to_string(after.size()) + (cleaned ? "" : " (CGAL could not remove them all)"));
-  }
-  remesh_slivers(mesh, options.min_angle_deg, say);
-  const bool closed = CGAL::is_closed(mesh);
-  m = from_mesh(mesh);
-  keep_largest_solid(m, say);
-  if (closed) orient_pieces(m, say);
-  return log;
 }
 
 }  // namespace chladni::precompute

@@ -8,6 +8,7 @@
 #include "chladni/precompute/acoustic_transfer.hpp"
 #include "chladni/precompute/eigensolve.hpp"
 #include "chladni/precompute/fem.hpp"
+#include "chladni/precompute/mesh_repair.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
 
@@ -64,7 +65,7 @@ struct StageTime {
 
 struct PrecomputeReport {
   MeshReport mesh;
-  std::vector<std::string> repairs;
+  RepairReport repair;  ///< with PrecomputeOptions::repair: the rung used and how far it moved
   /// Triangles of the checked surface before it was simplified (0: it was not), and the
   /// envelope (m) the simplified one stays within.
   std::size_t simplified_from = 0;

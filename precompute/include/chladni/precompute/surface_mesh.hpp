@@ -1,6 +1,6 @@
 #pragma once
-// A closed triangle surface as read from a file, its checks and its repair (CGAL Polygon Mesh
-// Processing). Only mesh_check.cpp and local_thickness.cpp include CGAL.
+// A closed triangle surface as read from a file, and its checks (CGAL Polygon Mesh Processing);
+// its repair is mesh_repair.hpp.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -54,6 +54,8 @@ struct MeshReport {
   double volume = 0;  ///< signed, m^3; > 0 when outward oriented
   std::array<double, 3> bbox_min{}, bbox_max{};
 
+  /// The signed volume is negligible against the bounding box: a flat or open sheet.
+  bool encloses_no_volume() const;
   /// One line per problem, each naming counts and example faces, edges or vertices (0-based).
   std::vector<std::string> problems() const;
   bool ok() const { return problems().empty(); }
@@ -66,17 +68,5 @@ MeshReport check_mesh(const SurfaceMesh& mesh);
 
 /// Throws InputError("<origin>: mesh is not a valid solid: ...") listing every problem.
 void require_valid(const MeshReport& report, const std::string& origin, bool after_repair);
-
-struct RepairOptions {
-  std::size_t max_hole_edges = 200;  ///< fill border cycles up to this many edges
-  double min_angle_deg = 5;          ///< remesh the surface when a triangle angle is smaller
-};
-
-/// Standard fixes in order: merge duplicate vertices and drop degenerate or duplicate triangles,
-/// orient consistently, stitch borders, remove degenerate faces, fill small holes, remove
-/// self-intersections where CGAL can, remesh needle triangles, keep the largest piece with the
-/// cavities inside it, orient each piece to bound the solid (outer faces out, cavity faces into
-/// the cavity). Returns one line per change made.
-std::vector<std::string> repair_mesh(SurfaceMesh& mesh, const RepairOptions& options = {});
 
 }  // namespace chladni::precompute
