@@ -63,7 +63,11 @@ double shift_for(const Material& m, const MeshReport& mesh) {
 bool simplify_if_dense(SurfaceMesh& surface, const PrecomputeOptions& o, PrecomputeReport& r,
                        const Progress& p, Stopwatch& sw) {
   const std::size_t n = surface.triangles.size();
-  if (o.max_surface_triangles == 0 || n <= o.max_surface_triangles || o.max_tet_volume > 0)
+  // An alpha wrap is denser than its shape by construction (its facets round every convex edge
+  // at the offset's radius), so it is simplified whatever its size.
+  const bool wrapped = r.repair.rung == RepairRung::Wrap;
+  if (o.max_surface_triangles == 0 || (n <= o.max_surface_triangles && !wrapped) ||
+      o.max_tet_volume > 0)
     return false;
   sw.start("simplify surface");
   const double envelope = simplification_envelope(surface, o.tolerance);
@@ -71,7 +75,7 @@ bool simplify_if_dense(SurfaceMesh& surface, const PrecomputeOptions& o, Precomp
   if (envelope > 0) {
     try {
       SurfaceMesh simpler =
-          simplify_surface(surface, o.max_surface_triangles / 2, envelope, p.fraction);
+          simplify_surface(surface, std::min(n, o.max_surface_triangles) / 2, envelope, p.fraction);
       const MeshReport check = check_mesh(simpler);
       const bool valid = check.ok() && check.outer_pieces == r.mesh.outer_pieces &&
                          check.cavities == r.mesh.cavities;

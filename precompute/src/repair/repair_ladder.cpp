@@ -38,6 +38,9 @@ constexpr double kFlat = 1e-6;
 // A wrap bounding less than this many offsets times the input's area is a slab around a sheet
 // (a wrapped open sheet bounds about 2 offsets times its area; a solid of wall t, t/2 times).
 constexpr double kSlab = 4;
+// A wall of the wrap under this many offsets is a slab round a sheet (it measures 2 offsets);
+// more than this share of its area in slabs and the wrap is not a solid's surface.
+constexpr double kSlabWall = 4, kSlabShare = 0.01;
 // The fraction of the offset the wrap is pulled back by: all of it would collapse the wrap's
 // rounding of convex edges onto the edges.
 constexpr double kPullBack = 0.9;
@@ -207,25 +210,59 @@ void pull_back(SurfaceMesh& wrap, double offset, const Say& say) {
   say("moved the wrap back toward the input by " + fmt("%.3g", kPullBack * offset * 1e3) + " mm");
 }
 
+// The share of the wrap's area that is a slab, a wall under kSlabWall offsets thick where the
+// wrap went round both sides of an open sheet, and a point on it.
+double slab_share(const SurfaceMesh& wrap, double offset, Vec3& where) {
+  const std::vector<double> t = local_thickness(wrap);
+  double slab = 0, total = 0, thinnest = INFINITY;
+  for (std::size_t f = 0; f < t.size(); ++f) {
+    const auto& tri = wrap.triangles[f];
+    const Vec3 &a = wrap.vertices[tri[0]], &b = wrap.vertices[tri[1]], &c = wrap.vertices[tri[2]];
+    const double area = 0.5 * norm(triangle_normal(a, b, c));
+    total += area;
+    if (t[f] > 0 && t[f] < kSlabWall * offset) {
+      slab += area;
+      if (t[f] < thinnest) thinnest = t[f], where = scale(add(add(a, b), c), 1.0 / 3);
+    }
+  }
+  return total > 0 ? slab / total : 0.0;
+}
+
 // Rung 3: the wrap, its debris dropped; a refusal when its parts stay apart or it is a slab
-// around a sheet.
+// around a sheet. Where part of it is a slab (a spout or a sleeve modelled as one layer, open at
+// its end), alpha doubles, up to D/10, so that the ball no longer enters the opening.
 bool wrap_rung(const SurfaceMesh& soup, const SurfaceMesh& input, const RepairOptions& o,
                SurfaceMesh& out, RepairReport& r, const Say& say) {
-  out = alpha_wrap(soup, r.alpha, r.offset);
-  say("wrapped the surface (CGAL 3D Alpha Wrapping, alpha " + fmt("%.3g", r.alpha * 1e3) +
-      " mm, offset " + fmt("%.3g", r.offset * 1e3) +
-      " mm): " + std::to_string(out.triangles.size()) + " triangles");
-  const std::vector<std::size_t> parts = drop_debris(out, o.debris_volume, true, say);
-  if (parts.size() > 1) {
-    r.refusal = parts_list(out, parts, "that do not touch (the wrap kept them apart)");
-    return false;
-  }
-  const double volume = check_mesh(out).volume;
-  if (volume < kSlab * r.offset * area(input)) {
-    r.refusal = "encloses no volume: an open sheet (the wrap is a slab " +
-                fmt("%.3g", 2 * r.offset * 1e3) +
-                " mm thick around it), not a solid; model its thickness";
-    return false;
+  for (;;) {
+    out = alpha_wrap(soup, r.alpha, r.offset);
+    say("wrapped the surface (CGAL 3D Alpha Wrapping, alpha " + fmt("%.3g", r.alpha * 1e3) +
+        " mm, offset " + fmt("%.3g", r.offset * 1e3) +
+        " mm): " + std::to_string(out.triangles.size()) + " triangles");
+    const std::vector<std::size_t> parts = drop_debris(out, o.debris_volume, true, say);
+    if (parts.size() > 1) {
+      r.refusal = parts_list(out, parts, "that do not touch (the wrap kept them apart)");
+      return false;
+    }
+    if (check_mesh(out).volume < kSlab * r.offset * area(input)) {
+      r.refusal = "encloses no volume: an open sheet (the wrap is a slab " +
+                  fmt("%.3g", 2 * r.offset * 1e3) +
+                  " mm thick around it), not a solid; model its thickness";
+      return false;
+    }
+    Vec3 at{0, 0, 0};
+    const double slab = slab_share(out, r.offset, at);
+    if (!(slab > kSlabShare)) break;
+    const std::string where =
+        fmt("%.2f %% of the wrap, e.g. at (%.4g, %.4g, %.4g) m", 100 * slab, at[0], at[1], at[2]);
+    if (o.wrap_alpha > 0 || 2 * r.alpha > r.size / 10) {
+      r.refusal = "part of it is an open sheet with no thickness (" + where + ", wraps to a slab " +
+                  fmt("%.3g", 2 * r.offset * 1e3) +
+                  " mm thick): model its thickness, or close its opening (a --repair-alpha "
+                  "wider than the opening)";
+      return false;
+    }
+    say("an open sheet wrapped to a slab (" + where + "): wrapping again with twice the alpha");
+    r.alpha *= 2;
   }
   pull_back(out, r.offset, say);
   return true;
