@@ -267,7 +267,14 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
 
   sw.start("check surface");
   if (o.repair) {
-    r.repair = repair_mesh(surface, o.repair_options);
+    try {
+      r.repair = repair_mesh(surface, o.repair_options);
+    } catch (const std::bad_alloc&) {
+      throw BudgetError(origin + ": --repair ran out of memory (" +
+                        std::to_string(surface.triangles.size()) +
+                        " triangles); a larger --repair-alpha or --repair-offset makes a coarser "
+                        "wrap");
+    }
     if (p.note)
       for (const auto& line : r.repair.log) p.note("repair: " + line);
     if (!r.repair.refusal.empty())

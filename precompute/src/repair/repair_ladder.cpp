@@ -182,12 +182,24 @@ double thinnest_wall(const SurfaceMesh& surface) {
 // a fiftieth of the wall, within 1/3000 and 1/500 of the size: small enough that pulling the
 // wrap back onto the input (pull_back) leaves walls their thickness, large enough that the wrap
 // needs no more triangles than the shape does.
-void wrap_parameters(const SurfaceMesh& surface, double diag, const RepairOptions& o,
+// Values given on the command line are held to ranges where the wrap's triangles (about the
+// area over alpha squared, more as the offset shrinks against alpha) stay within memory.
+bool wrap_parameters(const SurfaceMesh& surface, double diag, const RepairOptions& o,
                      RepairReport& r) {
   r.thinnest = std::min(thinnest_wall(surface), diag);
   const double wall = r.thinnest > 0 ? r.thinnest : diag / 20;  // an open sheet: no wall
   r.offset = o.wrap_offset > 0 ? o.wrap_offset : std::clamp(wall / 50, diag / 3000, diag / 500);
   r.alpha = o.wrap_alpha > 0 ? o.wrap_alpha : std::clamp(wall, diag / 100, diag / 50);
+  auto outside = [&](const char* name, double v, double lo, double hi) {
+    r.refusal = std::string(name) + " " + fmt("%g", v) + " m lies outside [" + fmt("%g", lo) +
+                ", " + fmt("%g", hi) + "] m for an object of " + fmt("%g", diag) + " m";
+    return false;
+  };
+  if (!(r.alpha >= diag / 1000 && r.alpha <= diag))
+    return outside("--repair-alpha", r.alpha, diag / 1000, diag);
+  if (!(r.offset >= diag * 1e-5 && r.offset <= diag / 10))
+    return outside("--repair-offset", r.offset, diag * 1e-5, diag / 10);
+  return true;
 }
 
 // The wrap lies `offset` outside the input, which thickens a wall of thickness t by 2 offset / t.
@@ -328,7 +340,7 @@ RepairReport repair_mesh(SurfaceMesh& m, const RepairOptions& o) {
            : had_intersections ? RepairRung::SelfIntersections
                                : RepairRung::Local;
   if (r.rung == RepairRung::Wrap) {
-    wrap_parameters(kept, r.size, o, r);
+    if (!wrap_parameters(kept, r.size, o, r)) return r;
     if (parts.size() > 1 && !had_intersections && !parts_touch(kept, parts, r.alpha)) {
       r.refusal = parts_list(kept, parts, "that do not touch");
       return r;
