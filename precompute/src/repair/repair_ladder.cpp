@@ -153,29 +153,6 @@ bool parts_touch(const SurfaceMesh& m, const std::vector<std::size_t>& parts, do
   return true;
 }
 
-// The thinnest wall of a surface (m): the thickness (shape diameter) below which lies this low a
-// fraction of its area, so that a few faces where a ray slipped between neighbours do not
-// decide; 0 when no ray found the far side (an open sheet).
-double thinnest_wall(const SurfaceMesh& surface) {
-  constexpr double kThinnestFraction = 0.05;
-  const std::vector<double> t = local_thickness(surface);
-  std::vector<std::pair<double, double>> walls;  // (thickness, area)
-  double total = 0;
-  for (std::size_t f = 0; f < t.size(); ++f) {
-    if (!(t[f] > 0)) continue;
-    const auto& tri = surface.triangles[f];
-    const double a = 0.5 * norm(triangle_normal(surface.vertices[tri[0]], surface.vertices[tri[1]],
-                                                surface.vertices[tri[2]]));
-    walls.emplace_back(t[f], a);
-    total += a;
-  }
-  std::sort(walls.begin(), walls.end());
-  double covered = 0;
-  for (const auto& [thickness, a] : walls)
-    if ((covered += a) >= kThinnestFraction * total) return thickness;
-  return 0;
-}
-
 // Rung 3's alpha and offset. Alpha is the thinnest wall, within a hundredth and a fiftieth of
 // the object's size: gaps and holes narrower than the walls close, a ball that small rounds
 // concave edges by less than it, and facets that size sag little on curved walls. The offset is

@@ -2,6 +2,8 @@
 
 #include <CGAL/mesh_segmentation.h>
 
+#include <algorithm>
+
 #include "cgal_surface.hpp"
 
 namespace chladni::precompute {
@@ -28,6 +30,25 @@ std::vector<double> local_thickness(const SurfaceMesh& surface) {
   for (Mesh::Face_index f : mesh.faces())  // faces are created in soup order
     thickness[f.idx()] = std::max(sdf[f], 0.0);
   return thickness;
+}
+
+double thinnest_wall(const SurfaceMesh& surface) {
+  const std::vector<double> thickness = local_thickness(surface);
+  std::vector<std::pair<double, double>> walls;  // (thickness, area)
+  double total = 0;
+  for (std::size_t f = 0; f < thickness.size(); ++f) {
+    if (!(thickness[f] > 0)) continue;
+    const auto& t = surface.triangles[f];
+    const auto& v = surface.vertices;
+    const double a = 0.5 * norm(triangle_normal(v[t[0]], v[t[1]], v[t[2]]));
+    walls.emplace_back(thickness[f], a);
+    total += a;
+  }
+  std::sort(walls.begin(), walls.end());
+  double below = 0;
+  for (const auto& [t, a] : walls)
+    if ((below += a) >= total / 20) return t;
+  return 0;
 }
 
 }  // namespace chladni::precompute

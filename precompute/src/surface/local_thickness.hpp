@@ -13,4 +13,9 @@ namespace chladni::precompute {
 /// open surface); all 0 when the surface is not a polygon mesh (non-manifold).
 std::vector<double> local_thickness(const SurfaceMesh& surface);
 
+/// The thinnest wall (m): the thickness below which lies the thinnest twentieth of the measured
+/// surface by area, so that a few faces where a ray slipped between neighbours do not decide;
+/// 0 when nothing was measured.
+double thinnest_wall(const SurfaceMesh& surface);
+
 }  // namespace chladni::precompute

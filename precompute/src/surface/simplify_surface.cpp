@@ -129,24 +129,7 @@ SurfaceMesh simplify_surface(const SurfaceMesh& surface, std::size_t target_tria
 }
 
 double simplification_envelope(const SurfaceMesh& surface, double tolerance, double share) {
-  const std::vector<double> thickness = local_thickness(surface);
-  std::vector<std::pair<double, double>> by_thickness;  // (thickness, area)
-  double total = 0;
-  for (std::size_t i = 0; i < thickness.size(); ++i) {
-    if (!(thickness[i] > 0)) continue;
-    const auto& t = surface.triangles[i];
-    const auto& v = surface.vertices;
-    const double a = 0.5 * norm(triangle_normal(v[t[0]], v[t[1]], v[t[2]]));
-    by_thickness.emplace_back(thickness[i], a);
-    total += a;
-  }
-  if (!(total > 0)) return 0;
-  std::sort(by_thickness.begin(), by_thickness.end());
-  double below = 0, thin = by_thickness.front().first;
-  for (const auto& [t, a] : by_thickness) {
-    thin = t;
-    if ((below += a) >= total / 20) break;
-  }
+  const double thin = thinnest_wall(surface);
   return share * tolerance * thin / 2;
 }
 
