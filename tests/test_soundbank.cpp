@@ -276,10 +276,14 @@ TEST(Soundbank, TransferMethodRoundTripsAndUnknownOnesAreRefused) {
   Soundbank b = small_bank();
   b.transfer->modes[1].method = TransferMethod::Bem;
   b.transfer->modes[1].iterations = 17;
-  const Soundbank r = parse_soundbank(serialize_soundbank(b), "mem");
+  Soundbank r = parse_soundbank(serialize_soundbank(b), "mem");
   EXPECT_EQ(r.transfer->modes[0].method, TransferMethod::Sources);
   EXPECT_EQ(r.transfer->modes[1].method, TransferMethod::Bem);
   EXPECT_EQ(r.transfer->modes[1].iterations, 17);
+  b.transfer->modes[0].method = TransferMethod::Wave;  // format 1.3
+  r = parse_soundbank(serialize_soundbank(b), "mem");
+  EXPECT_EQ(r.transfer->modes[0].method, TransferMethod::Wave);
+  EXPECT_STREQ(to_string(r.transfer->modes[0].method), "wave");
   b.transfer->modes[0].method = static_cast<TransferMethod>(7);
   try {
     parse_soundbank(serialize_soundbank(b), "mem");

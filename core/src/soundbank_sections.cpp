@@ -131,7 +131,7 @@ ModeTransfer read_mode_transfer(Reader& r, uint32_t i) {
   m.expansion_error = r.le<float>();
   const auto method = r.le<uint16_t>();  // 0 before format 1.2
   m.iterations = r.le<uint16_t>();
-  if (method > uint16_t(TransferMethod::Bem))
+  if (method > uint16_t(TransferMethod::Wave))
     r.fail("mode " + std::to_string(i) + " has unknown transfer method " + std::to_string(method));
   m.method = TransferMethod(method);
   if (m.order > 200) r.fail("mode " + std::to_string(i) + " has order " + std::to_string(m.order));

@@ -12,7 +12,9 @@ constexpr uint32_t kMaxOrder = 200;
 }
 
 const char* to_string(TransferMethod method) {
-  return method == TransferMethod::Bem ? "bem" : "sources";
+  return method == TransferMethod::Bem    ? "bem"
+         : method == TransferMethod::Wave ? "wave"
+                                          : "sources";
 }
 
 void Transfer::add_mode(ModeTransfer mode, const std::vector<std::complex<double>>& a) {

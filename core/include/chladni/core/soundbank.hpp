@@ -15,8 +15,9 @@ namespace chladni {
 
 struct Soundbank {
   static constexpr uint16_t kVersionMajor = 1;
-  /// 1.1: XFER holds a Transfer; 1.2: XFER's per-mode reserved word holds method and iterations
-  static constexpr uint16_t kVersionMinor = 2;
+  /// 1.1: XFER holds a Transfer; 1.2: XFER's per-mode reserved word holds method and iterations;
+  /// 1.3: method 2, the time-domain wave solve
+  static constexpr uint16_t kVersionMinor = 3;
 
   std::string metadata_json = "{}";  ///< META: free-form JSON (source mesh, settings, timings)
   Material material;                 ///< MATL: elastic constants and damping model

@@ -15,25 +15,27 @@
 
 namespace chladni {
 
-/// How a mode's surface pressure was found: equivalent sources fitted to the Neumann data, or
-/// a boundary-element (Burton-Miller) solve.
-enum class TransferMethod : uint16_t { Sources = 0, Bem = 1 };
+/// How a mode's field was found: equivalent sources fitted to the Neumann data, a
+/// boundary-element (Burton-Miller) solve, or the time-domain wave solve (since format 1.3).
+enum class TransferMethod : uint16_t { Sources = 0, Bem = 1, Wave = 2 };
 const char* to_string(TransferMethod method);
 
 struct ModeTransfer {
   double wavenumber = 0;  ///< k = omega / c (rad/m)
   uint32_t order = 0;     ///< L
-  uint32_t sources = 0;   ///< equivalent sources used in the fit; boundary elements for BEM
+  /// Equivalent sources used in the fit; boundary elements for BEM; grid cells for the wave solve.
+  uint32_t sources = 0;
   /// Sources: relative residual of the Neumann fit at collocation points. BEM: relative residual
-  /// of the linear solve.
+  /// of the linear solve. Wave: relative residual of the chord's separation over its window.
   float fit_residual = 0;
   /// Sources: relative Neumann error at held-out surface points. BEM: relative null-field error
   /// (the representation must vanish) at interior points deeper than 1.5 elements; 0 where the
-  /// walls are too thin to hold such points.
+  /// walls are too thin to hold such points. Wave: the separation's standard error relative to
+  /// the mode's own recorded amplitude.
   float held_out_error = 0;
   float expansion_error = 0;  ///< relative error of the expansion against the surface at 2R
   TransferMethod method = TransferMethod::Sources;
-  uint16_t iterations = 0;  ///< BEM: GMRES iterations (0: direct LU solve)
+  uint16_t iterations = 0;  ///< BEM: GMRES iterations (0: direct LU); wave: chord (1-based)
   uint64_t offset = 0;      ///< first coefficient in Transfer::coefficients
 };
 
