@@ -75,7 +75,8 @@ precompute::AcousticOptions::Method parse_transfer_method(const std::string& nam
   if (name == "auto") return M::Auto;
   if (name == "bem") return M::Bem;
   if (name == "sources") return M::Sources;
-  throw InputError(option + ": unknown method '" + name + "' (auto, bem, sources)");
+  if (name == "wave") return M::Wave;
+  throw InputError(option + ": unknown method '" + name + "' (auto, bem, wave, sources)");
 }
 
 SampleFormat parse_sample_format(const std::string& name) {

@@ -104,13 +104,21 @@ void print_transfer(const Transfer& t) {
       "kg/m^3; %zu coefficients; %zu poor fits (held-out error > %.0f%%)\n",
       t.centre[0], t.centre[1], t.centre[2], t.radius, t.sound_speed, t.air_density,
       t.coefficients.size(), t.poor_fits(), 100.0 * Transfer::kPoorFit);
-  std::size_t bem = 0;
-  for (const ModeTransfer& m : t.modes) bem += m.method == TransferMethod::Bem;
+  std::size_t bem = 0, wave = 0;
+  for (const ModeTransfer& m : t.modes) {
+    bem += m.method == TransferMethod::Bem;
+    wave += m.method == TransferMethod::Wave;
+  }
   if (bem > 0)
     std::printf(
         "          %zu modes by BEM (Burton-Miller): src/el. = boundary elements, residual = "
         "linear solve, held-out = interior null-field error\n",
         bem);
+  if (wave > 0)
+    std::printf(
+        "          %zu modes by the time-domain wave solve: iters = chord, src/el. = grid cells, "
+        "residual = chord separation, held-out = the mode's separation error\n",
+        wave);
 }
 
 // What --repair did (META "repair"), one line; a field missing from an older bank reads as 0.

@@ -171,6 +171,7 @@ precompute::PrecomputeOptions precompute_options(const PrecomputeArgs& a) {
   o.acoustic.air_density = a.air_density;
   o.acoustic.threads = a.threads;
   o.acoustic.bem.threads = a.threads;
+  o.acoustic.wave.threads = a.threads;
   o.acoustic.method = parse_transfer_method(a.transfer_method, "--transfer-method");
   o.acoustic.validate();
   if (o.transfer) o.gpu = transfer_device(a.transfer_backend);
@@ -236,10 +237,13 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
   }
   if (bank.transfer) {
     const auto& t = r.transfer_times;
+    std::size_t by[3] = {0, 0, 0};  // sources, bem, wave
+    for (const ModeTransfer& m : bank.transfer->modes) ++by[std::size_t(m.method) % 3];
     std::printf(
-        "transfer (%s): %zu modes, %zu poor fits (held-out error > %.0f%%), max held-out "
-        "%.2g; thread-seconds: matrices %.2f, solve %.2f, expansion %.2f\n",
-        r.transfer_kernels.c_str(), bank.transfer->mode_count(), r.poor_fits,
+        "transfer (%s): %zu modes (%zu BEM, %zu wave, %zu sources), %zu poor fits (held-out "
+        "error > %.0f%%), max held-out %.2g; thread-seconds: matrices %.2f, solve %.2f, "
+        "expansion %.2f\n",
+        r.transfer_kernels.c_str(), bank.transfer->mode_count(), by[1], by[2], by[0], r.poor_fits,
         100.0 * Transfer::kPoorFit, r.max_held_out, t.matrix, t.solve, t.expand);
   }
   std::printf("time:");
@@ -399,9 +403,10 @@ void add_precompute(CLI::App& app, bool run) {
       ->capture_default_str();
   cmd->add_option(
          "--transfer-method", a->transfer_method,
-         "Surface pressure per mode: bem (Burton-Miller boundary elements), sources "
-         "(equivalent-source fit) or auto (per mode: BEM where the surface has 6 elements per "
-         "wavelength and at most 12000 elements, else sources)")
+         "Radiated field per mode: bem (Burton-Miller boundary elements), wave (time-domain "
+         "solve with mode conflation, docs/transfer.md), sources (equivalent-source fit) or auto "
+         "(per mode: BEM where 6 elements per wavelength need at most 2000 elements, else the "
+         "wave solve where its grid fits --max-memory, else BEM or sources)")
       ->capture_default_str();
   cmd->add_option("--transfer-backend", a->transfer_backend,
                   "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")

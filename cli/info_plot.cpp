@@ -80,7 +80,7 @@ void write_info_plot(const std::string& path, const std::string& bank_path, cons
   const auto [flo, fhi] = log_bounds(f, 1.2);
   const auto [zlo, zhi] = log_bounds(zeta, 2);
   const plot::Colour blue{0.12, 0.47, 0.71}, red{0.84, 0.15, 0.16}, grey{0.55, 0.55, 0.55},
-      green{0.17, 0.63, 0.17};
+      green{0.17, 0.63, 0.17}, orange{1.0, 0.5, 0.05};
   fig.panel({100, 70, 1040, 360}, {"frequency (Hz)", flo, fhi, true},
             {"damping ratio d / omega", zlo, zhi, true}, "damping per mode");
   fig.points(f, zeta, {}, {}, blue, "modes");
@@ -102,14 +102,19 @@ void write_info_plot(const std::string& path, const std::string& bank_path, cons
             "transfer level per mode (rms over directions)");
   // One series per source of the gain, so the legend says which modes fell back.
   const char* names[] = {"equivalent sources", "boundary elements", "poor fit (held-out > 30%)",
-                         "compact-source estimate (no usable transfer)"};
-  const plot::Colour colours[] = {blue, green, red, grey};
-  for (int kind = 0; kind < 4; ++kind) {
+                         "compact-source estimate (no usable transfer)", "time-domain wave solve"};
+  const plot::Colour colours[] = {blue, green, red, grey, orange};
+  for (int kind = 0; kind < 5; ++kind) {
     std::vector<double> x, y;
     for (std::size_t i = 0; i < n; ++i) {
       int k = 3;
-      if (b.transfer && b.transfer->usable(i))
-        k = b.transfer->poor(i) ? 2 : b.transfer->modes[i].method == TransferMethod::Bem ? 1 : 0;
+      if (b.transfer && b.transfer->usable(i)) {
+        const TransferMethod m = b.transfer->modes[i].method;
+        k = b.transfer->poor(i)         ? 2
+            : m == TransferMethod::Bem  ? 1
+            : m == TransferMethod::Wave ? 4
+                                        : 0;
+      }
       if (k == kind) x.push_back(f[i]), y.push_back(db[i]);
     }
     if (!x.empty()) fig.points(x, y, {}, {}, colours[kind], names[kind]);

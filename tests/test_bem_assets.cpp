@@ -1,5 +1,5 @@
-// Boundary elements on a bundled asset, end to end: the bowl's lowest modes get BEM transfer at
-// default settings, and a rendered strike carries them at the level that transfer predicts.
+// Boundary elements on a bundled asset, end to end: the bowl's lowest modes by BEM transfer, and
+// a rendered strike carries them at the level that transfer predicts.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
@@ -40,7 +40,7 @@ TEST(BemAssets, BowlLowestModesByBemAndAudibleAtTheirPredictedLevel) {
   const std::string bank = test::temp_path("chladni_bem_bowl.chbank");
   std::string out;
   ASSERT_EQ(run("precompute " CHLADNI_SOURCE_DIR
-                "/meshes/bowl.obj --material brass --max-modes 4 -q -o " +
+                "/meshes/bowl.obj --material brass --max-modes 4 --transfer-method bem -q -o " +
                     bank,
                 &out),
             0)

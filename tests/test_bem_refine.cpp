@@ -69,8 +69,10 @@ TEST(BemRefine, FarFieldConvergesAsTheElementsHalve) {
   o.method = precompute::AcousticOptions::Method::Bem;
   EXPECT_EQ(precompute::bem_level(surf, k, o), 3);
   o = {};
-  o.bem_auto_elements = s.triangles.size();  // no room to split: the fit takes over
+  o.bem_auto_elements = s.triangles.size();  // no room to split: the wave solve takes over,
   EXPECT_EQ(precompute::bem_level(surf, k, o), -1);
+  EXPECT_EQ(precompute::resolve_method(surf, k, o), precompute::AcousticOptions::Method::Wave);
+  o.wave.max_memory = 1e6;  // and the fit where its grid does not fit the memory either
   EXPECT_EQ(precompute::resolve_method(surf, k, o), precompute::AcousticOptions::Method::Sources);
   o = {};
   // The memory budget caps the split as the element cap does (icosphere:2 has 320 triangles, so

@@ -166,12 +166,16 @@ void add_transfer(Soundbank& bank, const SurfaceMesh& surface, double max_memory
   r.transfer_kernels = kernels->name();
   AcousticOptions acoustic = o.acoustic;
   if (acoustic.bem_max_memory <= 0) acoustic.bem_max_memory = max_memory;
+  if (acoustic.wave.max_memory <= 0) acoustic.wave.max_memory = max_memory;
+  if (!acoustic.wave.gpu) acoustic.wave.gpu = o.gpu;
   if (!acoustic.bem.gpu) acoustic.bem.gpu = o.gpu;  // BEM rows on the same device
   try {
-    bank.transfer = compute_transfer(rs, bank, acoustic, *kernels, &r.transfer_times,
-                                     [&](std::size_t done, std::size_t total) {
-                                       if (p.fraction) p.fraction(double(done) / double(total));
-                                     });
+    bank.transfer = compute_transfer(
+        rs, bank, acoustic, *kernels, &r.transfer_times,
+        [&](std::size_t done, std::size_t total) {
+          if (p.fraction) p.fraction(double(done) / double(total));
+        },
+        p.note);
   } catch (const BudgetError& e) {
     throw BudgetError(origin + ": " + e.what());
   }
@@ -237,10 +241,17 @@ std::string metadata(const Soundbank& bank, const std::string& origin, const Pre
                         {"poor_fits", r.poor_fits}};
     using M = AcousticOptions::Method;
     const M m = o.acoustic.method;
-    std::size_t bem = 0;
-    for (const ModeTransfer& t : bank.transfer->modes) bem += t.method == TransferMethod::Bem;
-    meta["transfer"]["method"] = m == M::Auto ? "auto" : m == M::Bem ? "bem" : "sources";
+    std::size_t bem = 0, wave = 0;
+    for (const ModeTransfer& t : bank.transfer->modes) {
+      bem += t.method == TransferMethod::Bem;
+      wave += t.method == TransferMethod::Wave;
+    }
+    meta["transfer"]["method"] = m == M::Auto   ? "auto"
+                                 : m == M::Bem  ? "bem"
+                                 : m == M::Wave ? "wave"
+                                                : "sources";
     meta["transfer"]["bem_modes"] = bem;
+    meta["transfer"]["wave_modes"] = wave;
   }
   return meta.dump();
 }

@@ -89,7 +89,25 @@ AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k
                                        const AcousticOptions& o) {
   using M = AcousticOptions::Method;
   if (o.method != M::Auto) return o.method;
+  if (o.bem_cheap_elements > 0) {
+    AcousticOptions cheap = o;
+    cheap.bem_auto_elements = std::min(o.bem_auto_elements, o.bem_cheap_elements);
+    if (bem_level(surface, k, cheap) >= 0) return M::Bem;
+  }
+  if (wave_fits(surface, k, o)) return M::Wave;
   return bem_level(surface, k, o) >= 0 ? M::Bem : M::Sources;
+}
+
+bool wave_fits(const RadiatingSurface& surface, double k, const AcousticOptions& o) {
+  if (o.wave.max_memory <= 0) return true;
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = hi[a] = surface.mesh().vertices[0][a];
+  for (const Vec3& v : surface.mesh().vertices)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+  const double hz = k * o.sound_speed / (2 * std::numbers::pi);
+  const Chord alone{{0}, hz, hz, 0.0};
+  return wave_grid_size(lo, hi, alone, o.sound_speed, surface.area(), o.wave).bytes <=
+         o.wave.max_memory;
 }
 
 namespace {

@@ -104,6 +104,7 @@ void AcousticOptions::validate() const {
   if (!(bem_shared_frequency >= 0 && bem_shared_frequency <= 1e-2))
     throw InputError("transfer: bem shared frequency must lie in [0, 0.01]");
   bem.validate();
+  wave.validate();
 }
 
 RadiatingSurface::RadiatingSurface(const SurfaceMesh& mesh, const AcousticOptions& o)
@@ -393,7 +394,8 @@ std::vector<cd> source_pressure(const RadiatingSurface& surface, const SourceFit
 
 Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank,
                           const AcousticOptions& o, TransferKernels& kernels, TransferTimes* times,
-                          const std::function<void(std::size_t, std::size_t)>& progress) {
+                          const std::function<void(std::size_t, std::size_t)>& progress,
+                          const std::function<void(const std::string&)>& note) {
   const std::size_t nm = bank.mode_count(), nv = bank.vertices.size();
   if (nv != surface.mesh().vertices.size() || bank.shapes.size() != nm * nv * 3)
     throw InternalError("transfer: the bank's shapes do not match the surface");
@@ -426,10 +428,13 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
   } locked(kernels, kernel_mutex);
   TransferKernels& shared = kernels.thread_safe() ? kernels : static_cast<TransferKernels&>(locked);
   // Per mode: boundary elements where the surface resolves the wavelength (auto), else sources.
-  std::vector<std::size_t> by_bem, by_sources;
+  std::vector<std::size_t> by_bem, by_sources, by_wave;
   for (std::size_t i = 0; i < nm; ++i) {
     const double k = bank.damped_omega(i) / o.sound_speed;  // radiates at the damped frequency
-    (resolve_method(surface, k, o) == AcousticOptions::Method::Bem ? by_bem : by_sources)
+    const auto m = resolve_method(surface, k, o);
+    (m == AcousticOptions::Method::Bem    ? by_bem
+     : m == AcousticOptions::Method::Wave ? by_wave
+                                          : by_sources)
         .push_back(i);
   }
   auto tick = [&] {
@@ -440,6 +445,7 @@ Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank
     }
   };
   compute_transfer_bem(surface, bank, by_bem, o, modes, coeffs, &total, tick);
+  compute_transfer_wave(surface, bank, by_wave, o, modes, coeffs, &total, tick, note);
   std::exception_ptr error;
   // Modes are fitted in parallel, one per core: a threaded BLAS inside each fit would only
   // oversubscribe the cores (measured: 1.6x slower on 2 cores).

@@ -74,7 +74,8 @@ ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fi
 
 ModeTransfer finish_expansion(const RadiatingSurface& surface, double k, int L, std::vector<cd>& a,
                               const AcousticOptions& o,
-                              const std::function<void(const std::vector<Vec3>&, cd*)>& direct) {
+                              const std::function<void(const std::vector<Vec3>&, cd*)>& direct,
+                              std::size_t max_check) {
   const double R = surface.radius();
   // Trim the orders that carry (almost) nothing at 2R.
   std::vector<cd> ratio(static_cast<std::size_t>(L) + 1);
@@ -99,7 +100,8 @@ ModeTransfer finish_expansion(const RadiatingSurface& surface, double k, int L, 
   mt.order = static_cast<uint32_t>(keep);
 
   // Check against the direct field on the sphere of radius 2R.
-  const std::size_t nchk = std::clamp<std::size_t>(2 * sh_count(keep), 64, 512);
+  const std::size_t nchk =
+      std::clamp<std::size_t>(2 * sh_count(keep), 64, std::max<std::size_t>(max_check, 64));
   const std::vector<Vec3> pts = fibonacci_sphere(nchk, 2.0 * R);
   std::vector<cd> ref(nchk);
   direct(pts, ref.data());

@@ -16,18 +16,24 @@
 #include "chladni/precompute/bem.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/transfer_kernels.hpp"
+#include "chladni/precompute/wave_transfer.hpp"
 
 namespace chladni::precompute {
 
 struct AcousticOptions {
   /// bem: Burton-Miller boundary elements on the surface (docs/transfer.md); sources: the
-  /// equivalent-source fit; auto: per mode, BEM where the surface resolves the wavelength
-  /// (bem_elements_per_wavelength) and has at most bem_auto_elements triangles, else sources.
-  enum class Method { Auto, Bem, Sources };
+  /// equivalent-source fit; wave: the time-domain solve with mode conflation (wave_transfer.hpp);
+  /// auto: per mode, BEM where it is cheap (the surface resolves the wavelength with at most
+  /// bem_cheap_elements elements), else the wave solve where its grid fits the memory, else BEM
+  /// within bem_auto_elements, else sources.
+  enum class Method { Auto, Bem, Sources, Wave };
   Method method = Method::Auto;
   /// auto's cap: the dense system below BemOptions::hmatrix_limit (16 N^2 bytes, 1 GB at 8000),
   /// a hierarchical one above (2.5 GB and ~10 s per LU at 10,880 elements on 2 cores).
   std::size_t bem_auto_elements = 12000;
+  /// auto: BEM rather than the wave solve up to this many elements (a dense LU within about a
+  /// second on two cores); 0: the wave solve wherever it fits.
+  std::size_t bem_cheap_elements = 2000;
   /// bem: split the surface's triangles up to this many elements (above BemOptions::
   /// hmatrix_limit the system is a hierarchical matrix: about 1 GB and 20-60 s per frequency
   /// at 26,000 elements on 2 cores).
@@ -48,6 +54,7 @@ struct AcousticOptions {
   /// else one; 1 or 2 asks.
   int bem_solvers = 1;
   BemOptions bem;
+  WaveOptions wave;
   double sound_speed = 343.0;  ///< m/s
   double air_density = 1.204;  ///< kg/m^3 (air at 20 C)
   int order = 0;               ///< fixed expansion order L; 0: per mode from k and the sources
@@ -156,11 +163,12 @@ ModeTransfer expand_sources(const RadiatingSurface& surface, const SourceFit& fi
 
 /// Trims a full-order expansion a (a_lm = c_lm h_l(kR), order L) to the orders that carry more
 /// than options.truncation of the pressure at 2R and measures it against `direct` (the pressure
-/// at points given relative to the centre) on that sphere.
+/// at points given relative to the centre) at 2 (L+1)^2 points of that sphere, 64 to max_check.
 ModeTransfer finish_expansion(
     const RadiatingSurface& surface, double k, int L, std::vector<std::complex<double>>& a,
     const AcousticOptions& options,
-    const std::function<void(const std::vector<Vec3>&, std::complex<double>*)>& direct);
+    const std::function<void(const std::vector<Vec3>&, std::complex<double>*)>& direct,
+    std::size_t max_check = 512);
 
 /// Expansion order for wavenumber k on a surface of radius R: kR + 2 (kR)^(1/3) + 8, capped.
 int expansion_order(double k, double radius, const AcousticOptions& options);
@@ -198,7 +206,10 @@ std::vector<ModeTransfer> bem_transfer(const RadiatingSurface& surface, const Be
                                        std::vector<std::complex<double>>* pressure = nullptr,
                                        std::vector<std::complex<double>>* dpdn = nullptr);
 
-/// The method compute_transfer uses for a mode of wavenumber k on this surface (Bem or Sources).
+/// Whether the wave solve's grid for a mode of wavenumber k fits options.wave.max_memory.
+bool wave_fits(const RadiatingSurface& surface, double k, const AcousticOptions& options);
+
+/// The method compute_transfer uses for a mode of wavenumber k on this surface (never Auto).
 AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k,
                                        const AcousticOptions& options);
 
@@ -221,11 +232,22 @@ void compute_transfer_bem(const RadiatingSurface& surface, const Soundbank& bank
                           std::vector<std::vector<std::complex<double>>>& coeffs,
                           TransferTimes* times, const std::function<void()>& done);
 
+/// compute_transfer's time-domain path for the listed modes: chords, one grid and run each,
+/// separation and the box integral into multipoles; note() gets a line per chord. Throws
+/// BudgetError when a chord's grid exceeds options.wave.max_memory.
+void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& bank,
+                           const std::vector<std::size_t>& which, const AcousticOptions& options,
+                           std::vector<ModeTransfer>& modes,
+                           std::vector<std::vector<std::complex<double>>>& coeffs,
+                           TransferTimes* times, const std::function<void()>& done,
+                           const std::function<void(const std::string&)>& note = {});
+
 /// Transfer of every mode of a bank whose surface is `surface` (the bank's SURF). `progress`
-/// gets (modes done, modes total).
+/// gets (modes done, modes total); `note` a line per stage of the wave solve.
 Transfer compute_transfer(const RadiatingSurface& surface, const Soundbank& bank,
                           const AcousticOptions& options, TransferKernels& kernels,
                           TransferTimes* times = nullptr,
-                          const std::function<void(std::size_t, std::size_t)>& progress = {});
+                          const std::function<void(std::size_t, std::size_t)>& progress = {},
+                          const std::function<void(const std::string&)>& note = {});
 
 }  // namespace chladni::precompute

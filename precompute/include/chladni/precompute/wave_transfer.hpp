@@ -1,0 +1,75 @@
+#pragma once
+// Time-domain acoustic transfer with mode conflation (after Wang & James 2019, "KleinPAT: optimal
+// mode conflation for time-domain precomputation of acoustic transfer"). The linear acoustic
+// equations in pressure p and scaled velocity w = rho0 c v,
+//   dw/dt = -c grad p,   dp/dt = -c div w,
+// are stepped on a staggered (Yee) grid around the object, with Berenger's split-field perfectly
+// matched layer outside. Faces of the grid crossed by the surface carry the surface's velocity
+// along their axis, summed over the modes of a "chord": modes far enough apart in frequency to be
+// told apart in a short recording. After the start-up transient, p and w on a box around the
+// object are separated per mode by least squares against the chord's sinusoids, and each mode's
+// far field follows from the Kirchhoff-Helmholtz integral over that box as multipoles
+// (core/transfer.hpp), like the boundary-element path's. docs/transfer.md has the rules.
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+namespace chladni::gpu {
+class Context;
+}
+
+namespace chladni::precompute {
+
+struct WaveOptions {
+  /// Grid cells per wavelength at a chord's highest frequency (the grid halves its error per
+  /// doubling of this; docs/transfer.md measures it).
+  double cells_per_wavelength = 8.0;
+  /// At least this many cells along the object's longest side, whatever the frequency.
+  int min_cells = 32;
+  int pml_cells = 10;    ///< perfectly matched layer on every side
+  int margin_cells = 3;  ///< air between the object's box and the recording box
+  double courant = 0.5;  ///< c dt / h (stable below 1/sqrt 3)
+  /// Fit window = this / (smallest gap in the chord): the chord's sinusoids stay independent.
+  double beats = 1.5;
+  double ramp_periods = 3.0;  ///< smooth start over this many periods of the chord's lowest mode
+  /// Modes share a grid (a band) within this ratio of frequencies; the band's highest sets h.
+  double band_ratio = 1.5;
+  std::size_t max_chord = 48;  ///< modes per chord
+  /// Bytes a grid may take (0: no limit); a mode whose grid exceeds it is not solved this way.
+  double max_memory = 0;
+  /// Vulkan device for the stepping kernels (kernels/wave_*.comp, float); null: the CPU loops.
+  std::shared_ptr<gpu::Context> gpu;
+  int threads = 0;  ///< CPU stepping threads (0: all cores)
+  void validate() const;
+};
+
+/// Modes stepped together: indices into the caller's list, ascending in frequency.
+struct Chord {
+  std::vector<std::size_t> modes;
+  double f_min = 0, f_max = 0;  ///< Hz
+  double min_gap = 0;           ///< smallest frequency gap inside the chord (Hz; 0: one mode)
+};
+
+/// Bands of frequency ratio band_ratio from the top down; in each, modes packed first-fit into
+/// chords whose members lie at least a gap apart, the gap chosen to minimise simulated time
+/// (chords x (settling + beats / gap)). Near-degenerate modes land in different chords.
+std::vector<Chord> plan_chords(std::span<const double> hz, double settle_seconds,
+                               const WaveOptions& options);
+
+/// The grid a chord needs for an object of bounding box [lo, hi] (m).
+struct WaveGridSize {
+  double h = 0;  ///< cell size (m)
+  std::size_t nx = 0, ny = 0, nz = 0;
+  double dt = 0;          ///< s
+  std::size_t steps = 0;  ///< settle + fit window
+  std::size_t settle_steps = 0;
+  std::size_t stride = 1;  ///< steps between recorded samples
+  double bytes = 0;        ///< estimated peak memory of the solve
+  std::size_t cells() const { return nx * ny * nz; }
+};
+WaveGridSize wave_grid_size(const double lo[3], const double hi[3], const Chord& chord,
+                            double sound_speed, double surface_area, const WaveOptions& options);
+
+}  // namespace chladni::precompute

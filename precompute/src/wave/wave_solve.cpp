@@ -1,0 +1,195 @@
+// compute_transfer's time-domain path: per chord a grid, a run, a separation and each mode's
+// multipoles (wave_transfer.hpp).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "../timing.hpp"
+#include "chladni/core/error.hpp"
+#include "chladni/core/spherical.hpp"
+#include "chladni/precompute/acoustic_transfer.hpp"
+#include "wave_grid.hpp"
+#include "wave_project.hpp"
+
+namespace chladni::precompute {
+namespace {
+
+using wave::Problem;
+
+// Points on the sphere of radius 2R where each expansion is checked against the box integral
+// (each costs a pass over the box's faces).
+constexpr std::size_t kWaveCheckPoints = 64;
+
+// Berenger's split-field coefficients for a cell or face at depth d (m) into the layer:
+// sigma = sigma_max (d / delta)^2, sigma_max = 3 c ln(1 / R0) / (2 delta), R0 = 1e-5; the
+// update x' = (1 - s dt/2)/(1 + s dt/2) x - lambda / (1 + s dt/2) (difference).
+void layer(double d, double delta, double c, double dt, double lambda, float& a, float& b) {
+  const double sigma_max = 3.0 * c * std::log(1e5) / (2.0 * delta);
+  const double s = d > 0 ? sigma_max * (d / delta) * (d / delta) : 0.0;
+  a = float((1 - 0.5 * s * dt) / (1 + 0.5 * s * dt));
+  b = float(lambda / (1 + 0.5 * s * dt));
+}
+
+struct Built {
+  Problem problem;
+  std::vector<double> omega;
+};
+
+Built build(const RadiatingSurface& surface, const Soundbank& bank, const Chord& chord,
+            const std::vector<std::size_t>& which, const WaveGridSize& size,
+            const AcousticOptions& o) {
+  const WaveOptions& w = o.wave;
+  Built out;
+  Problem& P = out.problem;
+  wave::Grid& g = P.grid;
+  g.h = size.h;
+  g.n = {uint32_t(size.nx), uint32_t(size.ny), uint32_t(size.nz)};
+  const SurfaceMesh& mesh = surface.mesh();
+  Vec3 lo = mesh.vertices[0], hi = lo;
+  for (const Vec3& v : mesh.vertices)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+  // The grid is centred on the bounding box, so a body symmetric about its centre planes is
+  // discretized symmetrically (a staircase that breaks a symmetry makes a spurious field where
+  // the true one cancels, e.g. on the axis of a bowl's cos(n phi) modes). A small fraction of
+  // a cell keeps grid lines off the vertices of axis-aligned meshes.
+  const double jitter[3] = {0.0, 0.0, 0.0345678912};
+  for (int a = 0; a < 3; ++a)
+    g.origin[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * double(g.n[a]) * g.h + jitter[a] * g.h;
+  const double c = o.sound_speed, dt = size.dt, lambda = c * dt / g.h;
+  const double delta = w.pml_cells * g.h;
+  for (int a = 0; a < 3; ++a) {
+    const uint32_t n = g.n[a];
+    P.pml_lo[a] = uint32_t(w.pml_cells), P.pml_hi[a] = n - uint32_t(w.pml_cells);
+    for (auto* v : {&P.pa[a], &P.pb[a], &P.wa[a], &P.wb[a]}) v->resize(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      auto depth = [&](double x) {  // x in cells from the domain's lower edge
+        return std::max({0.0, (w.pml_cells - x) * g.h, (x - (n - w.pml_cells)) * g.h});
+      };
+      layer(depth(i + 0.5), delta, c, dt, lambda, P.pa[a][i], P.pb[a][i]);
+      layer(depth(i + 1.0), delta, c, dt, lambda, P.wa[a][i], P.wb[a][i]);
+    }
+  }
+  P.blocked = wave::block_faces(mesh, g);
+  const std::size_t J = chord.modes.size(), nv = mesh.vertices.size();
+  P.modes = J;
+  P.amplitude.assign(P.blocked.size() * J, 0.0f);
+  const double rho_c = o.air_density * c;
+  for (std::size_t j = 0; j < J; ++j) {
+    const std::size_t mode = which[chord.modes[j]];
+    out.omega.push_back(bank.damped_omega(mode));
+    const float* shape = bank.shapes.data() + mode * nv * 3;
+    for (std::size_t f = 0; f < P.blocked.size(); ++f) {
+      double v = 0;
+      for (uint32_t e = P.blocked.start[f]; e < P.blocked.start[f + 1]; ++e)
+        v += P.blocked.weight[e] * shape[3 * std::size_t(P.blocked.vertex[e]) + P.blocked.axis[f]];
+      P.amplitude[f * J + j] = float(rho_c * v);
+    }
+  }
+  // Modal velocity of q = cos(w t) (unit amplitude, e^(-i w t)): -w sin(w t), ramped in.
+  P.steps = size.steps;
+  P.first_sample = size.settle_steps;
+  P.stride = size.stride;
+  P.drive.resize(P.steps * J);
+  const double ramp = w.ramp_periods / chord.f_min;
+  for (std::size_t n = 0; n < P.steps; ++n) {
+    const double t = (double(n) + 0.5) * dt;
+    const double r = t < ramp ? 0.5 * (1 - std::cos(std::numbers::pi * t / ramp)) : 1.0;
+    for (std::size_t j = 0; j < J; ++j)
+      P.drive[n * J + j] = float(-out.omega[j] * std::sin(out.omega[j] * t) * r);
+  }
+  const uint32_t box = uint32_t(w.pml_cells + 2);
+  P.record = wave::record_box(g, {box, box, box}, {g.n[0] - box, g.n[1] - box, g.n[2] - box});
+  return out;
+}
+
+std::string chord_note(std::size_t index, std::size_t count, const Chord& chord,
+                       const WaveGridSize& s) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "chord %zu/%zu: %zu modes %.0f-%.0f Hz, grid %zux%zux%zu (h %.2f mm), %zu steps",
+                index + 1, count, chord.modes.size(), chord.f_min, chord.f_max, s.nx, s.ny, s.nz,
+                s.h * 1e3, s.steps);
+  return buf;
+}
+
+}  // namespace
+
+void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& bank,
+                           const std::vector<std::size_t>& which, const AcousticOptions& o,
+                           std::vector<ModeTransfer>& modes,
+                           std::vector<std::vector<std::complex<double>>>& coeffs,
+                           TransferTimes* times, const std::function<void()>& done,
+                           const std::function<void(const std::string&)>& note) {
+  if (which.empty()) return;
+  const SurfaceMesh& mesh = surface.mesh();
+  double lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) lo[a] = hi[a] = mesh.vertices[0][a];
+  for (const Vec3& v : mesh.vertices)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+  std::vector<double> hz;
+  for (std::size_t i : which) hz.push_back(bank.damped_omega(i) / (2 * std::numbers::pi));
+  // Settling beyond the ramp: about twice the padded object's diagonal, crossed at c.
+  const double span = std::sqrt(std::pow(hi[0] - lo[0], 2) + std::pow(hi[1] - lo[1], 2) +
+                                std::pow(hi[2] - lo[2], 2));
+  const std::vector<Chord> chords = plan_chords(hz, 3.0 * span / o.sound_speed, o.wave);
+  std::unique_ptr<wave::Stepper> stepper = wave::make_stepper(o.wave);
+  for (std::size_t ci = 0; ci < chords.size(); ++ci) {
+    const Chord& chord = chords[ci];
+    const WaveGridSize size = wave_grid_size(lo, hi, chord, o.sound_speed, surface.area(), o.wave);
+    if (o.wave.max_memory > 0 && size.bytes > o.wave.max_memory) {
+      throw BudgetError("transfer: the time-domain grid of " +
+                        chord_note(ci, chords.size(), chord, size) + " needs about " +
+                        std::to_string(int(size.bytes / 1e6)) + " MB, over the memory limit");
+    }
+    if (note) note(chord_note(ci, chords.size(), chord, size));
+    auto t0 = std::chrono::steady_clock::now();
+    const Built built = build(surface, bank, chord, which, size, o);
+    if (times) times->matrix += seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    std::vector<float> samples;
+    stepper->run(built.problem, samples, {});
+    if (times) times->solve += seconds_since(t0);
+    t0 = std::chrono::steady_clock::now();
+    const wave::Separated sep = wave::separate(built.problem, samples, built.omega, size.dt);
+    std::vector<double> ks;
+    std::vector<int> Ls;
+    for (double w : built.omega) {
+      ks.push_back(w / o.sound_speed);
+      Ls.push_back(expansion_order(ks.back(), surface.radius(), o));
+    }
+    std::vector<std::vector<cd>> cs =
+        wave::box_multipoles(built.problem, sep, ks, surface.centre(), Ls, o.wave.threads);
+    for (std::size_t j = 0; j < chord.modes.size(); ++j) {
+      const std::size_t i = which[chord.modes[j]];
+      const double k = ks[j];
+      const int L = Ls[j];
+      std::vector<cd>& c = cs[j];
+      std::vector<cd> h(std::size_t(L) + 1);
+      sph_hankel1(L, k * surface.radius(), h.data());
+      for (int l = 0; l <= L; ++l)
+        for (int m = -l; m <= l; ++m) c[sh_index(l, m)] *= h[std::size_t(l)];
+      ModeTransfer mt = finish_expansion(
+          surface, k, L, c, o,
+          [&](const std::vector<Vec3>& pts, cd* out) {
+            std::vector<Vec3> abs(pts.size());
+            for (std::size_t q = 0; q < pts.size(); ++q) abs[q] = add(pts[q], surface.centre());
+            wave::box_field(built.problem, sep, j, k, abs, out, o.wave.threads);
+          },
+          kWaveCheckPoints);
+      mt.method = TransferMethod::Wave;
+      mt.sources = uint32_t(std::min<std::size_t>(size.cells(), UINT32_MAX));
+      mt.fit_residual = float(sep.residual);
+      mt.held_out_error = float(sep.error[j]);
+
+      mt.iterations = uint16_t(std::min<std::size_t>(ci + 1, UINT16_MAX));
+      modes[i] = mt;
+      coeffs[i] = std::move(c);
+      if (done) done();
+    }
+    if (times) times->expand += seconds_since(t0);
+  }
+}
+
+}  // namespace chladni::precompute
