@@ -94,7 +94,7 @@ class CpuStepper final : public Stepper {
               zero.data()};
     const std::size_t hw = std::max(1u, std::thread::hardware_concurrency());
     const std::size_t T = std::min<std::size_t>(threads_ > 0 ? std::size_t(threads_) : hw, g.n[2]);
-    // Blocked faces by slab: each thread sets the faces of its own cells after its velocities.
+    // Blocked faces by plane: each is set right after its plane's velocities.
     std::vector<std::size_t> order(P.blocked.size());
     std::iota(order.begin(), order.end(), 0);
     const std::size_t s2 = g.stride(2);
@@ -103,11 +103,10 @@ class CpuStepper final : public Stepper {
     auto slab = [&](std::size_t t) {
       return std::pair<std::size_t, std::size_t>{g.n[2] * t / T, g.n[2] * (t + 1) / T};
     };
-    std::vector<std::size_t> face_begin(T + 1, order.size());
-    for (std::size_t t = 0, f = 0; t <= T; ++t) {
-      const std::size_t k0 = t < T ? slab(t).first : g.n[2];
-      while (f < order.size() && P.blocked.cell[order[f]] / s2 < k0) ++f;
-      face_begin[t] = f;
+    std::vector<std::size_t> plane_begin(g.n[2] + 1, order.size());
+    for (std::size_t k = 0, f = 0; k <= g.n[2]; ++k) {
+      while (f < order.size() && P.blocked.cell[order[f]] / s2 < k) ++f;
+      plane_begin[k] = f;
     }
     const std::size_t nrec = P.record.size(), ns = P.samples();
     samples.assign(ns * nrec * 2, 0.0f);
@@ -116,20 +115,29 @@ class CpuStepper final : public Stepper {
     auto worker = [&](std::size_t t) {
       const auto [k0, k1] = slab(t);
       const std::size_t r0 = nrec * t / T, r1 = nrec * (t + 1) / T;
+      // Plane by plane, velocity then pressure while the plane is in cache: the pressure of
+      // plane k needs the new z velocities of plane k - 1, the velocity of plane k the old
+      // pressure of plane k + 1. The slab's last plane's velocities go first, so the next slab
+      // may update its first plane's pressure after the barrier.
       for (std::size_t n = 0; n < P.steps; ++n) {
-        for (std::size_t k = k0; k < k1; ++k)
-          for (std::size_t j = 0; j < g.n[1]; ++j) rows.velocity(j, k);
         const float* drive = P.drive.data() + n * J;
-        for (std::size_t f = face_begin[t]; f < face_begin[t + 1]; ++f) {
-          const std::size_t q = order[f];
-          const float* amp = P.amplitude.data() + q * J;
-          float v = 0;
-          for (std::size_t m = 0; m < J; ++m) v += amp[m] * drive[m];
-          w[P.blocked.axis[q]][P.blocked.cell[q]] = v;
-        }
-        sync.arrive_and_wait();
-        for (std::size_t k = k0; k < k1; ++k)
+        auto velocity = [&](std::size_t k) {
+          for (std::size_t j = 0; j < g.n[1]; ++j) rows.velocity(j, k);
+          for (std::size_t f = plane_begin[k]; f < plane_begin[k + 1]; ++f) {
+            const std::size_t q = order[f];
+            const float* amp = P.amplitude.data() + q * J;
+            float v = 0;
+            for (std::size_t m = 0; m < J; ++m) v += amp[m] * drive[m];
+            w[P.blocked.axis[q]][P.blocked.cell[q]] = v;
+          }
+        };
+        auto pressure = [&](std::size_t k) {
           for (std::size_t j = 0; j < g.n[1]; ++j) rows.pressure(j, k);
+        };
+        velocity(k1 - 1);
+        sync.arrive_and_wait();
+        for (std::size_t k = k0; k + 1 < k1; ++k) velocity(k), pressure(k);
+        pressure(k1 - 1);
         sync.arrive_and_wait();
         if (n >= P.first_sample && (n - P.first_sample) % P.stride == 0) {
           float* out = samples.data() + (n - P.first_sample) / P.stride * nrec * 2;
