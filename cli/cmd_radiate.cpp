@@ -131,7 +131,9 @@ Radiated radiate(const RadiateArgs& a, const precompute::SurfaceMesh& mesh,
                  const std::vector<Vec3>& pts, precompute::AcousticOptions o,
                  const std::shared_ptr<gpu::Context>& ctx, precompute::TransferKernels& kernels) {
   Radiated r;
-  r.bem = precompute::resolve_method(surf, k, o) == precompute::AcousticOptions::Method::Bem;
+  using M = precompute::AcousticOptions::Method;
+  // One frequency: auto keeps its single-frequency rule, BEM up to bem_auto_elements.
+  r.bem = o.method == M::Bem || (o.method == M::Auto && precompute::bem_level(surf, k, o) >= 0);
   const precompute::NormalVelocity un_of = surf.from_vertex_values(un);
   std::vector<cd> a_lm, surface_p, surface_q;
   precompute::SourceFit fit;
@@ -247,6 +249,10 @@ void run_radiate(const RadiateArgs& a) {
   std::unique_ptr<precompute::TransferKernels> kernels =
       ctx ? precompute::make_gpu_transfer_kernels(ctx) : precompute::make_cpu_transfer_kernels();
   o.method = parse_transfer_method(a.method, "--method");
+  if (o.method == precompute::AcousticOptions::Method::Wave)
+    throw InputError(
+        "--method wave: the time-domain solve runs per soundbank (chladni "
+        "precompute --transfer-method wave); radiate takes auto, bem or sources");
   const Radiated r = radiate(a, mesh, surf, k, un, pts, o, ctx, *kernels);
   if (!a.json_path.empty())
     write_file_atomic(a.json_path, radiate_json(a, surf, k, r, pts, kernels->name()).dump(2) + "\n",

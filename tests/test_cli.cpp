@@ -445,8 +445,12 @@ TEST(CliRadiate, BadInputNamesFileAndLine) {
   EXPECT_NE(r.output.find("has 2562 vertices"), std::string::npos) << r.output;
   r = run("radiate " + sphere + " --freq 500 --pattern uniform --method fmm --points " + good);
   EXPECT_EQ(r.code, 2);
-  EXPECT_NE(r.output.find("--method: unknown method 'fmm' (auto, bem, wave, sources)"), std::string::npos)
+  EXPECT_NE(r.output.find("--method: unknown method 'fmm' (auto, bem, wave, sources)"),
+            std::string::npos)
       << r.output;
+  r = run("radiate " + sphere + " --freq 500 --pattern uniform --method wave --points " + good);
+  EXPECT_EQ(r.code, 2);
+  EXPECT_NE(r.output.find("radiate takes auto, bem or sources"), std::string::npos) << r.output;
   r = run("radiate " + sphere + " --freq 500 --pattern sphere-harmonic:l=2,m=5 --points " + good);
   EXPECT_EQ(r.code, 2);
   EXPECT_NE(r.output.find("|m| <= l"), std::string::npos) << r.output;
