@@ -175,6 +175,17 @@ TEST(WaveTransfer, GridOverTheMemoryLimitIsABudgetRefusal) {
   EXPECT_NE(precompute::resolve_method(surface, 20.0 / a, o), AcousticOptions::Method::Wave);
   o.wave.max_memory = 0;  // no limit
   EXPECT_EQ(precompute::resolve_method(surface, 20.0 / a, o), AcousticOptions::Method::Wave);
+  // Work, like memory: a chord over the cell-step limit is refused, and auto avoids it.
+  o.wave.max_cell_steps = 1e6;
+  EXPECT_NE(precompute::resolve_method(surface, 20.0 / a, o), AcousticOptions::Method::Wave);
+  o.method = AcousticOptions::Method::Wave;
+  try {
+    solve(bank, test::icosphere(a, 2), o);
+    FAIL() << "a chord over the work limit was run";
+  } catch (const BudgetError& e) {
+    EXPECT_NE(std::string(e.what()).find("cell-steps, over the limit"), std::string::npos)
+        << e.what();
+  }
 }
 
 }  // namespace

@@ -143,6 +143,15 @@ void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& ban
                         chord_note(ci, chords.size(), chord, size) + " needs about " +
                         std::to_string(int(size.bytes / 1e6)) + " MB, over the memory limit");
     }
+    if (size.cell_steps() > o.wave.max_cell_steps) {
+      char work[160];
+      std::snprintf(work, sizeof work,
+                    " would take %.3g cell-steps, over the limit of %.3g (an object this size at "
+                    "these frequencies)",
+                    size.cell_steps(), o.wave.max_cell_steps);
+      throw BudgetError("transfer: the time-domain " + chord_note(ci, chords.size(), chord, size) +
+                        work);
+    }
     if (note) note(chord_note(ci, chords.size(), chord, size));
     auto t0 = std::chrono::steady_clock::now();
     const Built built = build(surface, bank, chord, which, size, o);

@@ -206,7 +206,8 @@ std::vector<ModeTransfer> bem_transfer(const RadiatingSurface& surface, const Be
                                        std::vector<std::complex<double>>* pressure = nullptr,
                                        std::vector<std::complex<double>>* dpdn = nullptr);
 
-/// Whether the wave solve's grid for a mode of wavenumber k fits options.wave.max_memory.
+/// Whether the wave solve's grid for a mode of wavenumber k alone fits options.wave.max_memory
+/// and max_cell_steps.
 bool wave_fits(const RadiatingSurface& surface, double k, const AcousticOptions& options);
 
 /// The method compute_transfer uses for a mode of wavenumber k on this surface (never Auto).

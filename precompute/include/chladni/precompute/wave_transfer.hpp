@@ -39,6 +39,9 @@ struct WaveOptions {
   std::size_t max_chord = 48;  ///< modes per chord
   /// Bytes a grid may take (0: no limit); a mode whose grid exceeds it is not solved this way.
   double max_memory = 0;
+  /// Most cells x steps one chord may take (2e11: about 4 minutes of the CPU stepper on two
+  /// cores); beyond it a mode is not solved this way, so an odd scale cannot run for hours.
+  double max_cell_steps = 2e11;
   /// Vulkan device for the stepping kernels (kernels/wave_*.comp, float); null: the CPU loops.
   std::shared_ptr<gpu::Context> gpu;
   int threads = 0;  ///< CPU stepping threads (0: all cores)
@@ -68,6 +71,7 @@ struct WaveGridSize {
   std::size_t stride = 1;  ///< steps between recorded samples
   double bytes = 0;        ///< estimated peak memory of the solve
   std::size_t cells() const { return nx * ny * nz; }
+  double cell_steps() const { return double(cells()) * double(steps); }
 };
 WaveGridSize wave_grid_size(const double lo[3], const double hi[3], const Chord& chord,
                             double sound_speed, double surface_area, const WaveOptions& options);
