@@ -123,10 +123,13 @@ TEST(WaveTransfer, ChordsKeepCloseModesApart) {
     EXPECT_LE(c.f_max, c.f_min * o.band_ratio);
     for (std::size_t i = 0; i < c.modes.size(); ++i) {
       ++seen[c.modes[i]];
-      for (std::size_t j = 0; j < i; ++j)
+      for (std::size_t j = 0; j < i; ++j) {
         EXPECT_GE(std::abs(hz[c.modes[i]] - hz[c.modes[j]]), c.min_gap * (1 - 1e-12));
+      }
     }
-    if (c.modes.size() > 1) EXPECT_GE(c.min_gap, 1e-3 * c.f_max);
+    if (c.modes.size() > 1) {
+      EXPECT_GE(c.min_gap, 1e-3 * c.f_max);
+    }
   }
   for (std::size_t i = 0; i < hz.size(); ++i) EXPECT_EQ(seen[i], 1) << "mode " << i;
   EXPECT_THROW(precompute::plan_chords(std::vector<double>{100, -1}, 1e-3, o), InputError);

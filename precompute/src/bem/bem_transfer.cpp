@@ -94,6 +94,7 @@ AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k
     cheap.bem_auto_elements = std::min(o.bem_auto_elements, o.bem_cheap_elements);
     if (bem_level(surface, k, cheap) >= 0) return M::Bem;
   }
+  if (k * surface.radius() < o.bem_compact_kr && bem_level(surface, k, o) >= 0) return M::Bem;
   if (wave_fits(surface, k, o)) return M::Wave;
   return bem_level(surface, k, o) >= 0 ? M::Bem : M::Sources;
 }

@@ -24,8 +24,9 @@ struct AcousticOptions {
   /// bem: Burton-Miller boundary elements on the surface (docs/transfer.md); sources: the
   /// equivalent-source fit; wave: the time-domain solve with mode conflation (wave_transfer.hpp);
   /// auto: per mode, BEM where it is cheap (the surface resolves the wavelength with at most
-  /// bem_cheap_elements elements), else the wave solve where its grid fits the memory, else BEM
-  /// within bem_auto_elements, else sources.
+  /// bem_cheap_elements elements) or the body is compact (kR below bem_compact_kr, within
+  /// bem_auto_elements), else the wave solve where its grid fits the memory, else BEM within
+  /// bem_auto_elements, else sources.
   enum class Method { Auto, Bem, Sources, Wave };
   Method method = Method::Auto;
   /// auto's cap: the dense system below BemOptions::hmatrix_limit (16 N^2 bytes, 1 GB at 8000),
@@ -34,6 +35,10 @@ struct AcousticOptions {
   /// auto: BEM rather than the wave solve up to this many elements (a dense LU within about a
   /// second on two cores); 0: the wave solve wherever it fits.
   std::size_t bem_cheap_elements = 2000;
+  /// auto: BEM (within bem_auto_elements) for modes with k R below this. There the radiated
+  /// field is (kR)^2 of the near field on the wave solve's box, whose grid error the Kirchhoff
+  /// integral then magnifies; and the wave solve's steps per period grow as 1/k. 0: off.
+  double bem_compact_kr = 1.0;
   /// bem: split the surface's triangles up to this many elements (above BemOptions::
   /// hmatrix_limit the system is a hierarchical matrix: about 1 GB and 20-60 s per frequency
   /// at 26,000 elements on 2 cores).
