@@ -54,6 +54,14 @@ std::vector<Hit> crossings(const SurfaceMesh& mesh, const Grid& g, int a) {
   return hits;
 }
 
+Vec3 unit_normal(const SurfaceMesh& mesh, uint32_t t) {
+  const auto& tri = mesh.triangles[t];
+  const Vec3 n = cross(sub(mesh.vertices[tri[1]], mesh.vertices[tri[0]]),
+                       sub(mesh.vertices[tri[2]], mesh.vertices[tri[0]]));
+  const double l = norm(n);
+  return l > 0 ? scale(n, 1.0 / l) : Vec3{0, 0, 0};
+}
+
 }  // namespace
 
 BlockedFaces block_faces(const SurfaceMesh& mesh, const Grid& g, std::vector<uint8_t>* inside) {
@@ -85,9 +93,13 @@ BlockedFaces block_faces(const SurfaceMesh& mesh, const Grid& g, std::vector<uin
           const float share = 1.0f / float(r - q);
           for (std::size_t e = q; e < r; ++e) {
             const auto& tri = mesh.triangles[hits[e].tri];
+            const Vec3 n = unit_normal(mesh, hits[e].tri);
+            const std::array<float, 3> d{float(n[0] * n[a]), float(n[1] * n[a]),
+                                         float(n[2] * n[a])};
             for (int v = 0; v < 3; ++v) {
               out.vertex.push_back(tri[v]);
               out.weight.push_back(hits[e].bary[v] * share);
+              out.direction.push_back(d);
             }
           }
           out.start.push_back(uint32_t(out.vertex.size()));

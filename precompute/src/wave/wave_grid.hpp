@@ -37,6 +37,10 @@ struct BlockedFaces {
   std::vector<uint32_t> start;   ///< per face: first entry in vertex/weight (size faces + 1)
   std::vector<uint32_t> vertex;  ///< surface vertices interpolated at the crossings
   std::vector<float> weight;     ///< barycentric weight / crossings of the face
+  /// Per entry, n n_a of the crossed triangle (unit normal n, the face's axis a): the face
+  /// carries v . n n_a, the normal velocity's share along its axis, so that tangential motion,
+  /// which moves no air, drives nothing.
+  std::vector<std::array<float, 3>> direction;
   std::size_t size() const { return axis.size(); }
 };
 

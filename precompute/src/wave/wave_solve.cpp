@@ -82,8 +82,11 @@ Built build(const RadiatingSurface& surface, const Soundbank& bank, const Chord&
     const float* shape = bank.shapes.data() + mode * nv * 3;
     for (std::size_t f = 0; f < P.blocked.size(); ++f) {
       double v = 0;
-      for (uint32_t e = P.blocked.start[f]; e < P.blocked.start[f + 1]; ++e)
-        v += P.blocked.weight[e] * shape[3 * std::size_t(P.blocked.vertex[e]) + P.blocked.axis[f]];
+      for (uint32_t e = P.blocked.start[f]; e < P.blocked.start[f + 1]; ++e) {
+        const float* u = shape + 3 * std::size_t(P.blocked.vertex[e]);
+        const auto& d = P.blocked.direction[e];
+        v += P.blocked.weight[e] * (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]);
+      }
       P.amplitude[f * J + j] = float(rho_c * v);
     }
   }
