@@ -60,6 +60,7 @@ void WaveOptions::validate() const {
   in(double(max_chord), 1, 1024, "max chord");
   if (!(max_memory >= 0) || !std::isfinite(max_memory))
     throw InputError("transfer: wave max memory must be finite and >= 0");
+  in(retry_separation, 0, 1, "retry separation");
   if (!(max_cell_steps > 0) || !std::isfinite(max_cell_steps))
     throw InputError("transfer: wave max cell-steps must be finite and > 0");
 }

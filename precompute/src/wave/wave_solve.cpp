@@ -117,6 +117,91 @@ std::string chord_note(std::size_t index, std::size_t count, const Chord& chord,
   return buf;
 }
 
+// One run of the time-domain path: the surface, the bank, the modes it solves and where the
+// results go.
+struct WaveRun {
+  const RadiatingSurface& surface;
+  const Soundbank& bank;
+  const AcousticOptions& o;
+  double lo[3], hi[3];
+  std::vector<ModeTransfer>& modes;
+  std::vector<std::vector<std::complex<double>>>& coeffs;
+  TransferTimes* times;
+  wave::Stepper& stepper;
+};
+
+// Refuses a chord over the memory or work limit before anything is allocated.
+void check_budget(const WaveOptions& w, const WaveGridSize& size, const std::string& label) {
+  if (w.max_memory > 0 && size.bytes > w.max_memory) {
+    throw BudgetError("transfer: the time-domain grid of " + label + " needs about " +
+                      std::to_string(int(size.bytes / 1e6)) + " MB, over the memory limit");
+  }
+  if (size.cell_steps() > w.max_cell_steps) {
+    char work[160];
+    std::snprintf(work, sizeof work,
+                  " would take %.3g cell-steps, over the limit of %.3g (an object this size at "
+                  "these frequencies)",
+                  size.cell_steps(), w.max_cell_steps);
+    throw BudgetError("transfer: the time-domain " + label + work);
+  }
+}
+
+// Steps one chord and stores each of its modes (which[chord.modes[j]] in the bank); on a retry
+// only where the new separation is better than the stored one.
+void solve_chord(WaveRun& r, const Chord& chord, const std::vector<std::size_t>& which,
+                 const WaveGridSize& size, uint16_t number, bool retry) {
+  const AcousticOptions& o = r.o;
+  const RadiatingSurface& surface = r.surface;
+  auto t0 = std::chrono::steady_clock::now();
+  const Built built = build(surface, r.bank, chord, which, size, o);
+  if (r.times) r.times->matrix += seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  std::vector<float> samples;
+  r.stepper.run(built.problem, samples, {});
+  if (r.times) r.times->solve += seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  const wave::Separated sep = wave::separate(built.problem, samples, built.omega, size.dt);
+  std::vector<double> ks;
+  std::vector<int> Ls;
+  for (double w : built.omega) {
+    ks.push_back(w / o.sound_speed);
+    Ls.push_back(expansion_order(ks.back(), surface.radius(), o));
+  }
+  std::vector<std::vector<cd>> cs =
+      wave::box_multipoles(built.problem, sep, ks, surface.centre(), Ls, o.wave.threads);
+  for (std::size_t j = 0; j < chord.modes.size(); ++j) {
+    const std::size_t i = which[chord.modes[j]];
+    if (retry && !(sep.error[j] < r.modes[i].held_out_error)) continue;
+    const double k = ks[j];
+    const int L = Ls[j];
+    std::vector<cd>& c = cs[j];
+    std::vector<cd> h(std::size_t(L) + 1);
+    sph_hankel1(L, k * surface.radius(), h.data());
+    for (int l = 0; l <= L; ++l)
+      for (int m = -l; m <= l; ++m) c[sh_index(l, m)] *= h[std::size_t(l)];
+    ModeTransfer mt = finish_expansion(
+        surface, k, L, c, o,
+        [&](const std::vector<Vec3>& pts, cd* out) {
+          std::vector<Vec3> abs(pts.size());
+          for (std::size_t q = 0; q < pts.size(); ++q) abs[q] = add(pts[q], surface.centre());
+          wave::box_field(built.problem, sep, j, k, abs, out, o.wave.threads);
+        },
+        kWaveCheckPoints);
+    mt.method = TransferMethod::Wave;
+    mt.sources = uint32_t(std::min<std::size_t>(size.cells(), UINT32_MAX));
+    mt.fit_residual = float(sep.residual);
+    mt.held_out_error = float(sep.error[j]);
+    mt.iterations = number;
+    r.modes[i] = mt;
+    r.coeffs[i] = std::move(c);
+  }
+  if (r.times) r.times->expand += seconds_since(t0);
+}
+
+uint16_t chord_number(std::size_t index) {
+  return uint16_t(std::min<std::size_t>(index + 1, UINT16_MAX));
+}
+
 }  // namespace
 
 void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& bank,
@@ -126,81 +211,50 @@ void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& ban
                            TransferTimes* times, const std::function<void()>& done,
                            const std::function<void(const std::string&)>& note) {
   if (which.empty()) return;
-  const SurfaceMesh& mesh = surface.mesh();
-  double lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) lo[a] = hi[a] = mesh.vertices[0][a];
-  for (const Vec3& v : mesh.vertices)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
-  std::vector<double> hz;
-  for (std::size_t i : which) hz.push_back(bank.damped_omega(i) / (2 * std::numbers::pi));
-  // Settling beyond the ramp: about twice the padded object's diagonal, crossed at c.
-  const double span = std::sqrt(std::pow(hi[0] - lo[0], 2) + std::pow(hi[1] - lo[1], 2) +
-                                std::pow(hi[2] - lo[2], 2));
-  const std::vector<Chord> chords = plan_chords(hz, 3.0 * span / o.sound_speed, o.wave);
   std::unique_ptr<wave::Stepper> stepper = wave::make_stepper(o.wave);
+  WaveRun r{surface, bank, o, {}, {}, modes, coeffs, times, *stepper};
+  const SurfaceMesh& mesh = surface.mesh();
+  for (int a = 0; a < 3; ++a) r.lo[a] = r.hi[a] = mesh.vertices[0][a];
+  for (const Vec3& v : mesh.vertices)
+    for (int a = 0; a < 3; ++a)
+      r.lo[a] = std::min(r.lo[a], v[a]), r.hi[a] = std::max(r.hi[a], v[a]);
+  // Settling beyond the ramp: about twice the padded object's diagonal, crossed at c.
+  double span = 0;
+  for (int a = 0; a < 3; ++a) span += (r.hi[a] - r.lo[a]) * (r.hi[a] - r.lo[a]);
+  const double settle = 3.0 * std::sqrt(span) / o.sound_speed;
+  auto hz_of = [&](const std::vector<std::size_t>& list) {
+    std::vector<double> hz;
+    for (std::size_t i : list) hz.push_back(bank.damped_omega(i) / (2 * std::numbers::pi));
+    return hz;
+  };
+  const std::vector<Chord> chords = plan_chords(hz_of(which), settle, o.wave);
+  std::vector<std::size_t> weak;
   for (std::size_t ci = 0; ci < chords.size(); ++ci) {
     const Chord& chord = chords[ci];
-    const WaveGridSize size = wave_grid_size(lo, hi, chord, o.sound_speed, surface.area(), o.wave);
-    if (o.wave.max_memory > 0 && size.bytes > o.wave.max_memory) {
-      throw BudgetError("transfer: the time-domain grid of " +
-                        chord_note(ci, chords.size(), chord, size) + " needs about " +
-                        std::to_string(int(size.bytes / 1e6)) + " MB, over the memory limit");
-    }
-    if (size.cell_steps() > o.wave.max_cell_steps) {
-      char work[160];
-      std::snprintf(work, sizeof work,
-                    " would take %.3g cell-steps, over the limit of %.3g (an object this size at "
-                    "these frequencies)",
-                    size.cell_steps(), o.wave.max_cell_steps);
-      throw BudgetError("transfer: the time-domain " + chord_note(ci, chords.size(), chord, size) +
-                        work);
-    }
-    if (note) note(chord_note(ci, chords.size(), chord, size));
-    auto t0 = std::chrono::steady_clock::now();
-    const Built built = build(surface, bank, chord, which, size, o);
-    if (times) times->matrix += seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
-    std::vector<float> samples;
-    stepper->run(built.problem, samples, {});
-    if (times) times->solve += seconds_since(t0);
-    t0 = std::chrono::steady_clock::now();
-    const wave::Separated sep = wave::separate(built.problem, samples, built.omega, size.dt);
-    std::vector<double> ks;
-    std::vector<int> Ls;
-    for (double w : built.omega) {
-      ks.push_back(w / o.sound_speed);
-      Ls.push_back(expansion_order(ks.back(), surface.radius(), o));
-    }
-    std::vector<std::vector<cd>> cs =
-        wave::box_multipoles(built.problem, sep, ks, surface.centre(), Ls, o.wave.threads);
-    for (std::size_t j = 0; j < chord.modes.size(); ++j) {
-      const std::size_t i = which[chord.modes[j]];
-      const double k = ks[j];
-      const int L = Ls[j];
-      std::vector<cd>& c = cs[j];
-      std::vector<cd> h(std::size_t(L) + 1);
-      sph_hankel1(L, k * surface.radius(), h.data());
-      for (int l = 0; l <= L; ++l)
-        for (int m = -l; m <= l; ++m) c[sh_index(l, m)] *= h[std::size_t(l)];
-      ModeTransfer mt = finish_expansion(
-          surface, k, L, c, o,
-          [&](const std::vector<Vec3>& pts, cd* out) {
-            std::vector<Vec3> abs(pts.size());
-            for (std::size_t q = 0; q < pts.size(); ++q) abs[q] = add(pts[q], surface.centre());
-            wave::box_field(built.problem, sep, j, k, abs, out, o.wave.threads);
-          },
-          kWaveCheckPoints);
-      mt.method = TransferMethod::Wave;
-      mt.sources = uint32_t(std::min<std::size_t>(size.cells(), UINT32_MAX));
-      mt.fit_residual = float(sep.residual);
-      mt.held_out_error = float(sep.error[j]);
-
-      mt.iterations = uint16_t(std::min<std::size_t>(ci + 1, UINT16_MAX));
-      modes[i] = mt;
-      coeffs[i] = std::move(c);
+    const WaveGridSize size =
+        wave_grid_size(r.lo, r.hi, chord, o.sound_speed, surface.area(), o.wave);
+    const std::string label = chord_note(ci, chords.size(), chord, size);
+    check_budget(o.wave, size, label);
+    if (note) note(label);
+    solve_chord(r, chord, which, size, chord_number(ci), false);
+    for (std::size_t m : chord.modes) {
       if (done) done();
+      if (o.wave.retry_separation > 0 && chord.modes.size() > 1 &&
+          !(modes[which[m]].held_out_error <= o.wave.retry_separation))
+        weak.push_back(which[m]);
     }
-    if (times) times->expand += seconds_since(t0);
+  }
+  if (weak.empty()) return;
+  std::sort(weak.begin(), weak.end());
+  const std::vector<Chord> again = plan_chords(hz_of(weak), settle, o.wave);
+  for (std::size_t ci = 0; ci < again.size(); ++ci) {
+    const Chord& chord = again[ci];
+    const WaveGridSize size =
+        wave_grid_size(r.lo, r.hi, chord, o.sound_speed, surface.area(), o.wave);
+    const std::string label = "weak modes again, " + chord_note(ci, again.size(), chord, size);
+    check_budget(o.wave, size, label);
+    if (note) note(label);
+    solve_chord(r, chord, weak, size, chord_number(chords.size() + ci), true);
   }
 }
 

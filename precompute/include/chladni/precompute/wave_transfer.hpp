@@ -37,6 +37,10 @@ struct WaveOptions {
   /// Modes share a grid (a band) within this ratio of frequencies; the band's highest sets h.
   double band_ratio = 1.5;
   std::size_t max_chord = 48;  ///< modes per chord
+  /// Modes of a shared chord whose separation error (relative to their own amplitude) exceeds
+  /// this are stepped again among themselves: a mode that barely radiates, beside loud ones,
+  /// drowns in their residue. The better separation is kept. 0: no second pass.
+  double retry_separation = 0.1;
   /// Bytes a grid may take (0: no limit); a mode whose grid exceeds it is not solved this way.
   double max_memory = 0;
   /// Most cells x steps one chord may take (2e11: about 4 minutes of the CPU stepper on two
