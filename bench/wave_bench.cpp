@@ -238,6 +238,32 @@ nlohmann::json far_field(const Soundbank& b, const Transfer& t, std::size_t coun
   return out;
 }
 
+// One cluster's levels against the reference's, in dB over the same directions.
+struct Difference {
+  double rms = 0, worst = 0;
+  std::size_t worst_direction = 0;
+  double power = 0;     ///< radiated power (mean over directions), got over want
+  double lobe_rms = 0;  ///< rms over the directions within 10 dB of the reference's loudest
+};
+
+Difference difference(const nlohmann::json& got, const nlohmann::json& want) {
+  Difference d;
+  double sum = 0, lobe = 0, pg = 0, pw = 0, peak = -1e300;
+  std::size_t lobe_n = 0;
+  for (const auto& w : want) peak = std::max(peak, w.get<double>());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    const double g = got[i].get<double>(), w = want[i].get<double>(), e = g - w;
+    sum += e * e;
+    if (std::abs(e) > d.worst) d.worst = std::abs(e), d.worst_direction = i;
+    if (w >= peak - 10) lobe += e * e, ++lobe_n;
+    pg += std::pow(10.0, g / 10), pw += std::pow(10.0, w / 10);
+  }
+  d.rms = std::sqrt(sum / double(got.size()));
+  d.lobe_rms = std::sqrt(lobe / double(std::max<std::size_t>(lobe_n, 1)));
+  d.power = 10 * std::log10(pg / pw);
+  return d;
+}
+
 }  // namespace
 
 // BANK's transfer (solved again with --resolve-options, else as stored) against a reference's
@@ -265,35 +291,34 @@ int run_bank(const Args& a) {
   }
   const nlohmann::json want = nlohmann::json::parse(std::ifstream(a.reference))["clusters"];
   if (want.size() < got.size()) throw std::invalid_argument("the reference has fewer clusters");
-  std::size_t within = 0, all = 0;
+  std::size_t within = 0, all = 0, power_within = 0, lobe_within = 0;
   double worst_rms = 0, worst_any = 0;
   nlohmann::json rows = nlohmann::json::array();
-  std::printf("%9s %5s %8s %8s %6s %8s\n", "Hz", "modes", "rms dB", "max dB", "dir", "method");
+  std::printf("%9s %5s %8s %8s %6s %8s %8s %8s\n", "Hz", "modes", "rms dB", "max dB", "dir",
+              "power dB", "lobe dB", "method");
   for (std::size_t c = 0; c < got.size(); ++c) {
-    const auto& g = got[c]["db"];
-    const auto& w = want[c]["db"];
-    double sum = 0, worst = 0;
-    std::size_t worst_dir = 0;
-    for (std::size_t d = 0; d < g.size(); ++d) {
-      const double e = g[d].get<double>() - w[d].get<double>();
-      sum += e * e;
-      if (std::abs(e) > worst) worst = std::abs(e), worst_dir = d;
-    }
-    const double rms = std::sqrt(sum / double(g.size()));
+    const Difference e = difference(got[c]["db"], want[c]["db"]);
     const double hz = got[c]["hz"][0].get<double>();
     std::size_t first = 0;
     for (std::size_t q = 0; q < c; ++q) first += got[q]["hz"].size();
     const char* method = to_string(b.transfer->modes[first].method);
-    std::printf("%9.1f %5zu %8.2f %8.2f %6zu %8s\n", hz, got[c]["hz"].size(), rms, worst, worst_dir,
-                method);
-    within += rms <= 1.5, ++all;
-    worst_rms = std::max(worst_rms, rms), worst_any = std::max(worst_any, worst);
+    std::printf("%9.1f %5zu %8.2f %8.2f %6zu %8.2f %8.2f %8s\n", hz, got[c]["hz"].size(), e.rms,
+                e.worst, e.worst_direction, e.power, e.lobe_rms, method);
+    within += e.rms <= 1.5, ++all;
+    power_within += std::abs(e.power) <= 1.0, lobe_within += e.lobe_rms <= 1.5;
+    worst_rms = std::max(worst_rms, e.rms), worst_any = std::max(worst_any, e.worst);
     rows.push_back({{"hz", hz},
-                    {"rms_db", rms},
-                    {"max_db", worst},
-                    {"worst_direction", worst_dir},
+                    {"rms_db", e.rms},
+                    {"max_db", e.worst},
+                    {"worst_direction", e.worst_direction},
+                    {"power_db", e.power},
+                    {"lobe_rms_db", e.lobe_rms},
                     {"method", method}});
   }
+  std::printf(
+      "radiated power within 1 dB: %zu of %zu; within 1.5 dB rms over the directions "
+      "within 10 dB of the reference's loudest: %zu of %zu\n",
+      power_within, all, lobe_within, all);
   std::printf(
       "%zu of %zu clusters within 1.5 dB rms (%.1f %%); worst rms %.2f dB, worst "
       "direction %.2f dB; solve %.1f s\n",
