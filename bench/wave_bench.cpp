@@ -1,7 +1,8 @@
 // The time-domain transfer solve (docs/transfer.md, docs/PERFORMANCE.md "Time-domain transfer").
 //   chladni_wave_bench sphere [--l L,L..] [--ka KA,KA..] [--radius M] [--level N] [common]
 //     a sphere's surface moving as P_l(cos t) against the exact field (rms over directions at 3a);
-//   chladni_wave_bench bank BANK --reference REF [--method wave|auto] [--modes N] [common]
+//   chladni_wave_bench bank BANK --reference REF [--method wave|auto|bem|stored] [--modes N]
+//   [common]
 //     BANK's modes solved again, compared with REF's transfer (the same modes, e.g. solved by
 //     --transfer-method bem): far-field level per cluster of modes within 0.3 % in frequency
 //     (summed power), rms and worst dB over 400 directions.
@@ -98,7 +99,8 @@ Args parse(int argc, char** argv) {
 
 AcousticOptions options(const Args& a) {
   AcousticOptions o;
-  o.method = a.method == "auto" ? AcousticOptions::Method::Auto : AcousticOptions::Method::Wave;
+  using M = AcousticOptions::Method;
+  o.method = a.method == "auto" ? M::Auto : a.method == "bem" ? M::Bem : M::Wave;
   if (a.cpw > 0) o.wave.cells_per_wavelength = a.cpw;
   if (a.min_cells > 0) o.wave.min_cells = a.min_cells;
   if (a.backend == "gpu") o.wave.gpu = std::make_shared<gpu::Context>();
@@ -280,6 +282,10 @@ int run_bank(const Args& a) {
     head.shapes.resize(count * b.vertices.size() * 3);
     head.residual.resize(std::min(head.residual.size(), count));
     b.transfer = solve(head, mesh, options(a), seconds);
+    float worst = 0;
+    for (const ModeTransfer& m : b.transfer->modes) worst = std::max(worst, m.held_out_error);
+    std::printf("solved %zu modes (%s): largest held-out error %.3g\n", count, a.method.c_str(),
+                double(worst));
   }
   if (!b.transfer) throw std::invalid_argument(a.bank + " has no transfer");
   const nlohmann::json got = far_field(b, *b.transfer, count);

@@ -48,6 +48,21 @@ double null_field_error(const BemMesh& mesh, double k, const std::vector<cd>& p,
   return den > 0 ? std::sqrt(num / den) : 0.0;
 }
 
+// Generalized winding number of the surface about x, sum of the triangles' solid angles / 4 pi
+// (Van Oosterom & Strackee 1983): 1 inside a closed outward surface, 0 outside.
+double winding_number(const SurfaceMesh& m, const Vec3& x) {
+  double sum = 0;
+  for (const auto& t : m.triangles) {
+    const Vec3 a = sub(m.vertices[t[0]], x), b = sub(m.vertices[t[1]], x),
+               c = sub(m.vertices[t[2]], x);
+    const double la = norm(a), lb = norm(b), lc = norm(c);
+    const double num = dot(a, cross(b, c));
+    const double den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
+    sum += 2 * std::atan2(num, den);
+  }
+  return sum / (4 * std::numbers::pi);
+}
+
 }  // namespace
 
 double bem_memory(std::size_t n, const BemOptions& o) {
@@ -159,11 +174,13 @@ ModeTransfer expand_solution(const RadiatingSurface& surface, const BemMesh& mes
   mt.iterations = static_cast<uint16_t>(std::min(res.iterations, 65535));
   mt.fit_residual = static_cast<float>(res.residual);
   // Interior points at least 1.5 elements from every element centroid (near the surface the
-  // field of piecewise-constant data is not meant to be accurate).
+  // field of piecewise-constant data is not meant to be accurate), and inside by the winding
+  // number: at a concave edge of a CAD part, a vertex stepped against its averaged normal can
+  // land in the air, where the representation is the radiated field, not zero.
   std::vector<Vec3> inside;
   const double clearance = 1.5 * mesh.mean_size();
   for (const Vec3& x : surface.interior_points(64, clearance)) {
-    bool clear = true;
+    bool clear = winding_number(surface.mesh(), x) > 0.5;
     for (std::size_t j = 0; j < n && clear; ++j)
       clear = dot(sub(x, mesh.centroid[j]), sub(x, mesh.centroid[j])) >= clearance * clearance;
     if (clear && inside.size() < 16) inside.push_back(x);
