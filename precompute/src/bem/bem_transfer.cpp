@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "../blas_threads.hpp"
+#include "../surface/surface_pieces.hpp"
 #include "../timing.hpp"
 #include "bem_side_process.hpp"
 #include "chladni/core/error.hpp"
@@ -48,18 +49,11 @@ double null_field_error(const BemMesh& mesh, double k, const std::vector<cd>& p,
   return den > 0 ? std::sqrt(num / den) : 0.0;
 }
 
-// Generalized winding number of the surface about x, sum of the triangles' solid angles / 4 pi
-// (Van Oosterom & Strackee 1983): 1 inside a closed outward surface, 0 outside.
+// Generalized winding number of the surface about x: 1 inside a closed outward surface, 0 outside.
 double winding_number(const SurfaceMesh& m, const Vec3& x) {
   double sum = 0;
-  for (const auto& t : m.triangles) {
-    const Vec3 a = sub(m.vertices[t[0]], x), b = sub(m.vertices[t[1]], x),
-               c = sub(m.vertices[t[2]], x);
-    const double la = norm(a), lb = norm(b), lc = norm(c);
-    const double num = dot(a, cross(b, c));
-    const double den = la * lb * lc + dot(a, b) * lc + dot(b, c) * la + dot(c, a) * lb;
-    sum += 2 * std::atan2(num, den);
-  }
+  for (const auto& t : m.triangles)
+    sum += solid_angle(x, m.vertices[t[0]], m.vertices[t[1]], m.vertices[t[2]]);
   return sum / (4 * std::numbers::pi);
 }
 

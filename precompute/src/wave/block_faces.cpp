@@ -56,8 +56,8 @@ std::vector<Hit> crossings(const SurfaceMesh& mesh, const Grid& g, int a) {
 
 Vec3 unit_normal(const SurfaceMesh& mesh, uint32_t t) {
   const auto& tri = mesh.triangles[t];
-  const Vec3 n = cross(sub(mesh.vertices[tri[1]], mesh.vertices[tri[0]]),
-                       sub(mesh.vertices[tri[2]], mesh.vertices[tri[0]]));
+  const Vec3 n =
+      triangle_normal(mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]);
   const double l = norm(n);
   return l > 0 ? scale(n, 1.0 / l) : Vec3{0, 0, 0};
 }
