@@ -6,7 +6,7 @@
 //     BANK's modes solved again, compared with REF's transfer (the same modes, e.g. solved by
 //     --transfer-method bem): far-field level per cluster of modes within 0.3 % in frequency
 //     (summed power), rms and worst dB over 400 directions.
-//   common: [--cpw X] [--min-cells N] [--backend cpu|gpu] [--json OUT]
+//   common: [--cpw X] [--min-cells N] [--turns N] [--backend cpu|gpu] [--json OUT]
 #include <chrono>
 #include <cmath>
 #include <complex>
@@ -38,7 +38,7 @@ struct Args {
   std::vector<int> l{0, 1, 2, 4, 6, 8, 10};
   std::vector<double> ka{2, 5, 10, 20, 30};
   double radius = 0.1, cpw = 0, wall = 0;
-  int level = 5, min_cells = 0, m = 0;
+  int level = 5, min_cells = 0, m = 0, turns = 0;
   std::size_t modes = 100000;
 };
 
@@ -79,6 +79,8 @@ Args parse(int argc, char** argv) {
       a.cpw = std::stod(v);
     else if (k == "--min-cells")
       a.min_cells = std::stoi(v);
+    else if (k == "--turns")
+      a.turns = std::stoi(v);
     else if (k == "--backend")
       a.backend = v;
     else if (k == "--method")
@@ -103,6 +105,7 @@ AcousticOptions options(const Args& a) {
   o.method = a.method == "auto" ? M::Auto : a.method == "bem" ? M::Bem : M::Wave;
   if (a.cpw > 0) o.wave.cells_per_wavelength = a.cpw;
   if (a.min_cells > 0) o.wave.min_cells = a.min_cells;
+  if (a.turns > 0) o.wave.grid_turns = a.turns;
   if (a.backend == "gpu") o.wave.gpu = std::make_shared<gpu::Context>();
   return o;
 }

@@ -1,6 +1,7 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// One sample of the recording box: per face p (mean of its two cells) and w. extra.x: faces,
+// One sample of the recording box: per face p (four-point interpolation along the face's
+// axis, wave_cpu.cpp) and w. extra.x: faces,
 // extra.y: sample slot in the buffer.
 layout(local_size_x = 256) in;
 #include "wave_common.glsl"
@@ -15,5 +16,6 @@ void main() {
   if (q >= pc.extra.x) return;
   const uvec2 f = face[q];
   const uint c = f.x % pc.n.w;
-  samples[pc.extra.y * pc.extra.x + q] = vec2(0.5 * (p[c] + p[c + f.y]), w[f.x]);
+  const float pf = (9.0 * (p[c] + p[c + f.y]) - (p[c - f.y] + p[c + 2u * f.y])) * (1.0 / 16.0);
+  samples[pc.extra.y * pc.extra.x + q] = vec2(pf, w[f.x]);
 }

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <vector>
 
+#include "../precompute/src/wave/wave_grid.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/soundbank.hpp"
 #include "chladni/core/spherical.hpp"
@@ -76,22 +77,41 @@ double sphere_error(const Transfer& t, std::size_t mode, int l, double k, double
 }
 
 // At defaults the grid is 32 cells across this sphere (the wavelengths are longer): the
-// staircase's first-order error, measured at 0.3-7 % (docs/transfer.md).
+// staircase's first-order error, measured at 0.3, 1.1, 3.4 and 4.2 % (docs/transfer.md).
 TEST(WaveTransfer, SphereHarmonicsMatchTheExactField) {
   const double a = 0.1;
   AcousticOptions o;
   o.method = AcousticOptions::Method::Wave;
   const std::vector<std::pair<int, double>> cases = {{0, 1.0}, {1, 2.0}, {2, 3.0}, {3, 5.0}};
-  const double bound[] = {0.006, 0.025, 0.08, 0.1};
+  const double bound[] = {0.006, 0.02, 0.05, 0.06};
   const Soundbank bank = sphere_modes(a, 4, cases, o.sound_speed);
   const Transfer t = solve(bank, test::icosphere(a, 4), o);
   for (std::size_t m = 0; m < cases.size(); ++m) {
     EXPECT_EQ(t.modes[m].method, TransferMethod::Wave);
     EXPECT_LT(t.modes[m].held_out_error, 1e-3) << "separation error, mode " << m;
-    EXPECT_LT(t.modes[m].expansion_error, 0.01) << m;
+    EXPECT_LT(t.modes[m].expansion_error, 0.02) << m;  // 1.2-1.3 %: the box integral at 2R
     const double k = cases[m].second / a;
-    EXPECT_LT(sphere_error(t, m, cases[m].first, k, a, 3 * a, o), bound[m])
-        << "l " << cases[m].first << ", ka " << cases[m].second;
+    const double e = sphere_error(t, m, cases[m].first, k, a, 3 * a, o);
+    std::printf("l %d, ka %.0f: %.4f\n", cases[m].first, cases[m].second, e);
+    EXPECT_LT(e, bound[m]) << "l " << cases[m].first << ", ka " << cases[m].second;
+  }
+}
+
+// Short waves: at ka = 30 the grid is set by the wavelength (8 cells), 77 cells across. Faces
+// driven with the delay from the surface to the face, and the grid driven at the frequency
+// where its waves have the true wavenumber, keep the phase: measured 4.1, 3.8 and 6.2 % for
+// l = 0, 5, 10 (15-18 % before either, mostly phase).
+TEST(WaveTransfer, SphereHarmonicsAtKa30) {
+  const double a = 0.1;
+  AcousticOptions o;
+  o.method = AcousticOptions::Method::Wave;
+  const std::vector<std::pair<int, double>> cases = {{0, 30.0}, {5, 30.0}, {10, 30.0}};
+  const Soundbank bank = sphere_modes(a, 5, cases, o.sound_speed);
+  const Transfer t = solve(bank, test::icosphere(a, 5), o);
+  for (std::size_t m = 0; m < cases.size(); ++m) {
+    const double e = sphere_error(t, m, cases[m].first, 30.0 / a, a, 3 * a, o);
+    std::printf("l %d, ka 30: %.4f\n", cases[m].first, e);
+    EXPECT_LT(e, 0.075) << "l " << cases[m].first;
   }
 }
 
@@ -106,6 +126,7 @@ TEST(WaveTransfer, ErrorHalvesAsTheCellsHalve) {
     o.wave.min_cells = 20 * (i + 1);
     e[i] = sphere_error(solve(bank, test::icosphere(a, 4), o), 0, 2, 3.0 / a, a, 3 * a, o);
   }
+  std::printf("20 cells: %.4f, 40 cells: %.4f\n", e[0], e[1]);
   EXPECT_LT(e[1], 0.7 * e[0]) << e[0] << " -> " << e[1];
   EXPECT_GT(e[1], 0.3 * e[0]) << "faster than first order: the test no longer measures it";
 }
@@ -241,6 +262,79 @@ TEST(WaveTransfer, WeakModesAreSteppedAgainAlone) {
   EXPECT_EQ(twice.modes[0].iterations, once.modes[0].iterations) << "the loud mode kept its chord";
   o.wave.retry_separation = 2;
   EXPECT_THROW(solve(bank, s, o), InputError);
+}
+
+// A prolate spheroid (semi-axes a, a, 1.25a) whose surface moves along its normal as
+// sin^4(t) cos(4 phi) at ka = 5: its field vanishes on the z axis, where every m != 0 wave does.
+// The grid's four-fold symmetry about z couples cos 4 phi to m = 0, which does not vanish there;
+// turned 45 degrees that coupling changes sign, so the two orientations' mean cancels it.
+double on_axis_leak(int turns) {
+  const double a = 0.1;
+  AcousticOptions o;
+  o.method = AcousticOptions::Method::Wave;
+  o.wave.grid_turns = turns;
+  test::SurfaceMesh s = test::icosphere(a, 4);
+  for (Vec3& v : s.vertices) v[2] *= 1.25;
+  Soundbank bank;
+  bank.vertices = s.vertices;
+  bank.triangles = s.triangles;
+  bank.omega.push_back(5.0 / a * o.sound_speed);
+  bank.decay.push_back(0.0);
+  for (const Vec3& v : s.vertices) {
+    const Vec3 n = scale(Vec3{v[0], v[1], v[2] / (1.25 * 1.25)},
+                         1.0 / norm(Vec3{v[0], v[1], v[2] / (1.25 * 1.25)}));
+    bank.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
+    const double rho = std::hypot(v[0], v[1]) / a, phi = std::atan2(v[1], v[0]);
+    const Vec3 d = scale(n, std::pow(rho, 4) * std::cos(4 * phi));
+    for (int q = 0; q < 3; ++q) bank.shapes.push_back(float(d[q]));
+  }
+  const Transfer t = solve(bank, s, o);
+  double peak = 0;
+  for (int i = 0; i < 400; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / 400, rho = std::sqrt(1 - z * z), ph = 2.4 * i;
+    peak = std::max(peak, std::abs(t.pressure(
+                              0, scale(Vec3{rho * std::cos(ph), rho * std::sin(ph), z}, 10 * a))));
+  }
+  const double axis =
+      std::max(std::abs(t.pressure(0, {0, 0, 10 * a})), std::abs(t.pressure(0, {0, 0, -10 * a})));
+  return axis / peak;
+}
+
+TEST(WaveTransfer, TwoOrientationsCancelTheGridsFourFoldLeak) {
+  const double one = on_axis_leak(1), two = on_axis_leak(2);
+  std::printf("on the axis, relative to the lobe: one orientation %.2e, two %.2e\n", one, two);
+  EXPECT_LT(two, 0.25 * one);
+  EXPECT_LT(two, 2e-3);  // measured 9.2e-4 (one orientation: 6.8e-3)
+}
+
+// A box whose faces, edges and vertices lie exactly on the grid's lines (an axis-aligned CAD
+// part on a grid that happens to fit it): every line through it or along its boundary is
+// blocked once where it enters and once where it leaves, never missed and never twice.
+TEST(WaveTransfer, LinesThroughEdgesAndVerticesBlockOnceAtEachEnd) {
+  precompute::wave::Grid g;
+  g.h = 0.01;
+  g.n = {10, 10, 10};
+  test::SurfaceMesh box = test::box_surface({0.03, 0.03, 0.03}, {3, 3, 3});
+  for (Vec3& v : box.vertices)  // [0, 0.03]^3 -> [0.025, 0.055]^3: centres at 0.005 + i h
+    for (double& x : v) x += 0.025;
+  const precompute::wave::BlockedFaces f = precompute::wave::block_faces(box, g);
+  std::array<std::vector<int>, 3> per_line;
+  for (auto& v : per_line) v.assign(100, 0);
+  for (std::size_t q = 0; q < f.size(); ++q) {
+    const uint32_t a = f.axis[q];
+    const uint64_t c = f.cell[q];
+    const uint64_t idx[3] = {c % 10, (c / 10) % 10, c / 100};
+    ++per_line[a][idx[(a + 1) % 3] + 10 * idx[(a + 2) % 3]];
+  }
+  for (int a = 0; a < 3; ++a) {
+    for (int k = 0; k < 10; ++k) {
+      for (int j = 0; j < 10; ++j) {
+        const bool through = j >= 2 && j <= 5 && k >= 2 && k <= 5;  // centres 0.025 .. 0.055
+        EXPECT_EQ(per_line[a][std::size_t(j + 10 * k)], through ? 2 : 0)
+            << "axis " << a << ", line " << j << ", " << k;
+      }
+    }
+  }
 }
 
 }  // namespace

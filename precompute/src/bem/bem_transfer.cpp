@@ -109,13 +109,10 @@ AcousticOptions::Method resolve_method(const RadiatingSurface& surface, double k
 }
 
 bool wave_fits(const RadiatingSurface& surface, double k, const AcousticOptions& o) {
-  double lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) lo[a] = hi[a] = surface.mesh().vertices[0][a];
-  for (const Vec3& v : surface.mesh().vertices)
-    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
+  const WaveLayout layout = wave_layout(surface.mesh(), o.wave);
   const double hz = k * o.sound_speed / (2 * std::numbers::pi);
   const Chord alone{{0}, hz, hz, 0.0};
-  const WaveGridSize s = wave_grid_size(lo, hi, alone, o.sound_speed, surface.area(), o.wave);
+  const WaveGridSize s = wave_grid_size(layout, alone, o.sound_speed, surface.area(), o.wave);
   return (o.wave.max_memory <= 0 || s.bytes <= o.wave.max_memory) &&
          s.cell_steps() <= o.wave.max_cell_steps;
 }

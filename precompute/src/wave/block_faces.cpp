@@ -8,6 +8,8 @@
 namespace chladni::precompute::wave {
 namespace {
 
+constexpr double kEdge = 1e-9;  // barycentric and along-line tolerance (cell units)
+
 struct Hit {
   uint64_t line;  // j + n_b k
   double s;       // position along the axis in cell units (centre i at s = i)
@@ -40,7 +42,9 @@ std::vector<Hit> crossings(const SurfaceMesh& mesh, const Grid& g, int a) {
         const double l1 = ((x - u[0]) * (v[2] - v[0]) - (u[2] - u[0]) * (y - v[0])) / area;
         const double l2 = ((u[1] - u[0]) * (y - v[0]) - (x - u[0]) * (v[1] - v[0])) / area;
         const double l0 = 1.0 - l1 - l2;
-        if (l0 < 0 || l1 < 0 || l2 < 0) continue;
+        // Inclusive by a hair: a line through an edge or a vertex is caught by every triangle
+        // there, never by none (the duplicates are dropped below).
+        if (l0 < -kEdge || l1 < -kEdge || l2 < -kEdge) continue;
         hits.push_back({uint64_t(j) + uint64_t(g.n[b]) * uint64_t(k),
                         l0 * s[0] + l1 * s[1] + l2 * s[2],
                         t,
@@ -51,7 +55,11 @@ std::vector<Hit> crossings(const SurfaceMesh& mesh, const Grid& g, int a) {
   std::sort(hits.begin(), hits.end(), [](const Hit& x, const Hit& y) {
     return x.line != y.line ? x.line < y.line : x.s < y.s;
   });
-  return hits;
+  std::vector<Hit> unique;
+  for (const Hit& h : hits)
+    if (unique.empty() || unique.back().line != h.line || h.s - unique.back().s > kEdge)
+      unique.push_back(h);
+  return unique;
 }
 
 Vec3 unit_normal(const SurfaceMesh& mesh, uint32_t t) {
@@ -64,10 +72,9 @@ Vec3 unit_normal(const SurfaceMesh& mesh, uint32_t t) {
 
 }  // namespace
 
-BlockedFaces block_faces(const SurfaceMesh& mesh, const Grid& g, std::vector<uint8_t>* inside) {
+BlockedFaces block_faces(const SurfaceMesh& mesh, const Grid& g) {
   BlockedFaces out;
   out.start.push_back(0);
-  std::vector<uint8_t> votes(inside ? g.cells() : 0, 0);
   for (int a = 0; a < 3; ++a) {
     const int b = (a + 1) % 3, c = (a + 2) % 3;
     const std::vector<Hit> hits = crossings(mesh, g, a);
@@ -96,30 +103,20 @@ BlockedFaces block_faces(const SurfaceMesh& mesh, const Grid& g, std::vector<uin
             const Vec3 n = unit_normal(mesh, hits[e].tri);
             const std::array<float, 3> d{float(n[0] * n[a]), float(n[1] * n[a]),
                                          float(n[2] * n[a])};
+            const float reach = float((double(i) + 0.5 - hits[e].s) * g.h * n[a]);
             for (int v = 0; v < 3; ++v) {
               out.vertex.push_back(tri[v]);
               out.weight.push_back(hits[e].bary[v] * share);
               out.direction.push_back(d);
+              out.reach.push_back(reach);
             }
           }
           out.start.push_back(uint32_t(out.vertex.size()));
         }
         q = r;
       }
-      if (inside) {  // parity of the crossings before each centre
-        std::size_t q = h0;
-        bool odd = false;
-        for (long i = 0; i < na; ++i) {
-          while (q < h1 && hits[q].s < double(i)) odd = !odd, ++q;
-          if (odd) ++votes[cell_at(i)];
-        }
-      }
       h0 = h1;
     }
-  }
-  if (inside) {
-    inside->resize(g.cells());
-    for (std::size_t i = 0; i < votes.size(); ++i) (*inside)[i] = votes[i] >= 2;
   }
   return out;
 }

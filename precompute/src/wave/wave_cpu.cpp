@@ -85,7 +85,7 @@ class CpuStepper final : public Stepper {
   void run(const Problem& P, std::vector<float>& samples,
            const std::function<void(std::size_t)>& progress) override {
     const Grid& g = P.grid;
-    const std::size_t cells = g.cells(), J = P.modes;
+    const std::size_t cells = g.cells(), J = P.series;
     std::vector<float> p(cells, 0.0f), px(cells, 0.0f), py(cells, 0.0f);
     std::array<std::vector<float>, 3> w;
     for (auto& v : w) v.assign(cells, 0.0f);
@@ -143,8 +143,10 @@ class CpuStepper final : public Stepper {
           float* out = samples.data() + (n - P.first_sample) / P.stride * nrec * 2;
           for (std::size_t q = r0; q < r1; ++q) {
             const uint32_t a = P.record.axis[q];
-            const std::size_t c = P.record.cell[q];
-            out[2 * q] = 0.5f * (p[c] + p[c + g.stride(int(a))]);
+            const std::size_t c = P.record.cell[q], d = g.stride(int(a));
+            // Four-point interpolation to the face (the two-point mean reads a wave crossing the
+            // face cos(kh/2) low: 8 % at 8 cells a wavelength; this, 0.8 %).
+            out[2 * q] = (9.0f * (p[c] + p[c + d]) - (p[c - d] + p[c + 2 * d])) * (1.0f / 16.0f);
             out[2 * q + 1] = w[a][c];
           }
           sync.arrive_and_wait();

@@ -40,7 +40,7 @@ class GpuStepper final : public Stepper {
   void run(const Problem& P, std::vector<float>& samples,
            const std::function<void(std::size_t)>& progress) override {
     const Grid& g = P.grid;
-    const std::size_t N = g.cells(), J = P.modes, nf = P.blocked.size(), nr = P.record.size();
+    const std::size_t N = g.cells(), J = P.series, nf = P.blocked.size(), nr = P.record.size();
     const uint64_t range = ctx_->limits().maxStorageBufferRange;
     if (3 * N * sizeof(float) > range || 3 * N > UINT32_MAX)
       throw gpu::Error("wave: a grid of " + std::to_string(N) + " cells exceeds " +

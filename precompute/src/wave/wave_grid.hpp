@@ -41,18 +41,23 @@ struct BlockedFaces {
   /// carries v . n n_a, the normal velocity's share along its axis, so that tangential motion,
   /// which moves no air, drives nothing.
   std::vector<std::array<float, 3>> direction;
+  /// Per entry, how far the face lies outside the surface along its normal (m, n_a times the
+  /// signed distance from the crossing to the face along the axis): the wave the surface sends
+  /// out reaches the face that much later, so the face carries the velocity delayed by
+  /// reach / c. The staircase then radiates from where the surface is, not from the grid's
+  /// planes, and its first-order phase error goes.
+  std::vector<float> reach;
   std::size_t size() const { return axis.size(); }
 };
 
 /// Marks every face whose segment between cell centres crosses the surface (any number of times,
 /// so a wall thinner than a cell still blocks it). Lines along each axis through the cell centres
-/// are intersected with the triangles; `inside` gets, per cell, whether the majority of the three
-/// axes' crossing parities puts its centre inside the surface.
-BlockedFaces block_faces(const SurfaceMesh& mesh, const Grid& grid,
-                         std::vector<uint8_t>* inside = nullptr);
+/// are intersected with the triangles; a line through an edge or a vertex counts once.
+BlockedFaces block_faces(const SurfaceMesh& mesh, const Grid& grid);
 
 /// The recording box: the faces on the boundary of the cell range [lo, hi) with their outward
-/// sign. Samples record p (mean of the two cells) and w there.
+/// sign. Samples record p (interpolated from the four cells along the axis) and w there; the
+/// box must lie two cells inside the domain.
 struct RecordFaces {
   std::vector<uint32_t> axis;
   std::vector<uint64_t> cell;  ///< lower cell of the face
@@ -71,17 +76,34 @@ struct Problem {
   /// Cells in [pml_lo, pml_hi) along every axis are outside the layer (no split fields).
   std::array<uint32_t, 3> pml_lo{0, 0, 0}, pml_hi{0, 0, 0};
   BlockedFaces blocked;
-  std::size_t modes = 0;
-  std::vector<float> amplitude;  ///< per blocked face, per mode: rho0 c (shape . e_axis)
-  std::vector<float> drive;      ///< per step, per mode: modal velocity at t = (n + 1/2) dt
+  /// Drive series: a blocked face's w is sum over series of amplitude x drive. Two per mode, in
+  /// phase and in quadrature, so that each face can carry its own delay.
+  std::size_t series = 0;
+  std::vector<float> amplitude;  ///< per blocked face, per series
+  std::vector<float> drive;      ///< per step, per series, at t = (n + 1/2) dt
   std::size_t steps = 0;
   std::size_t first_sample = 0;  ///< recorded after steps first_sample, + stride, ...
   std::size_t stride = 1;
   RecordFaces record;
+  /// The grid's frame to the object's: x_object = pivot + turn (x_grid - pivot), rows of a
+  /// rotation. Identity unless the object was turned against the grid.
+  std::array<Vec3, 3> turn{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};
+  Vec3 pivot{0, 0, 0};
+  Vec3 to_object(const Vec3& x) const {
+    const Vec3 d = sub(x, pivot);
+    return {pivot[0] + dot(turn[0], d), pivot[1] + dot(turn[1], d), pivot[2] + dot(turn[2], d)};
+  }
+  /// The grid's axis `a` in the object's frame (a column of turn).
+  Vec3 axis_in_object(uint32_t a) const { return {turn[0][a], turn[1][a], turn[2][a]}; }
   std::size_t samples() const {
     return steps > first_sample ? (steps - first_sample + stride - 1) / stride : 0;
   }
 };
+
+/// Rows of the rotation by `angle` (radians) about coordinate axis `axis`.
+std::array<Vec3, 3> turn_rows(int axis, double angle);
+/// The mesh with every vertex x moved to pivot + rows (x - pivot).
+SurfaceMesh turned(const SurfaceMesh& mesh, const std::array<Vec3, 3>& rows, const Vec3& pivot);
 
 /// A stepping backend: runs the whole problem and returns the samples, [sample][face][p, w].
 /// progress(steps done) is called now and then from the calling thread.

@@ -61,6 +61,7 @@ void WaveOptions::validate() const {
   if (!(max_memory >= 0) || !std::isfinite(max_memory))
     throw InputError("transfer: wave max memory must be finite and >= 0");
   in(retry_separation, 0, 1, "retry separation");
+  in(grid_turns, 1, 4, "grid turns");
   if (!(max_cell_steps > 0) || !std::isfinite(max_cell_steps))
     throw InputError("transfer: wave max cell-steps must be finite and > 0");
 }
@@ -101,8 +102,9 @@ std::vector<Chord> plan_chords(std::span<const double> hz, double settle, const 
   return out;
 }
 
-WaveGridSize wave_grid_size(const double lo[3], const double hi[3], const Chord& chord, double c,
+WaveGridSize wave_grid_size(const WaveLayout& layout, const Chord& chord, double c,
                             double surface_area, const WaveOptions& o) {
+  const double *lo = layout.lo, *hi = layout.hi;
   WaveGridSize s;
   double longest = 0;
   for (int a = 0; a < 3; ++a) longest = std::max(longest, hi[a] - lo[a]);
@@ -126,10 +128,12 @@ WaveGridSize wave_grid_size(const double lo[3], const double hi[3], const Chord&
   const double samples = double(s.steps - s.settle_steps) / double(s.stride) + 1;
   const double record = 2.0 * (double(n[0] * n[1] + n[1] * n[2] + n[0] * n[2]));
   const double J = double(chord.modes.size());
+  s.turns = std::max<std::size_t>(1, layout.turns.size());
   s.bytes = double(s.cells()) * 6 * 4                          // p, two split parts, three w
             + record * samples * 2 * (4 + 2 * 8)               // float samples, double copies
-            + 2.0 * surface_area / (s.h * s.h) * (J * 4 + 64)  // blocked faces
-            + double(s.steps) * J * 4;                         // drive
+            + double(s.turns) * record * J * 2 * 16            // each turn's separation
+            + 2.0 * surface_area / (s.h * s.h) * (J * 8 + 68)  // blocked faces
+            + double(s.steps) * J * 8;                         // drive, two series a mode
   return s;
 }
 

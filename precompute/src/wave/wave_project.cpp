@@ -13,11 +13,18 @@
 namespace chladni::precompute::wave {
 namespace {
 
-Vec3 face_centre(const Grid& g, uint32_t axis, uint64_t cell) {
+// A recording face's centre and outward unit normal, in the object's frame.
+struct Face {
+  Vec3 x, n;
+};
+Face record_face(const Problem& P, std::size_t f) {
+  const Grid& g = P.grid;
+  const uint32_t axis = P.record.axis[f];
+  const uint64_t cell = P.record.cell[f];
   const uint64_t i = cell % g.n[0], j = (cell / g.n[0]) % g.n[1], k = cell / g.stride(2);
   Vec3 x = g.centre(i, j, k);
   x[axis] += 0.5 * g.h;
-  return x;
+  return {P.to_object(x), scale(P.axis_in_object(axis), double(P.record.sign[f]))};
 }
 
 }  // namespace
@@ -88,11 +95,10 @@ std::vector<std::vector<cd>> box_multipoles(const Problem& P, const Separated& s
     const std::size_t nlm = sh_count(Lmax);
     std::vector<double> y(nlm), yp(nlm), ym(nlm), j(std::size_t(Lmax) + 2);
     for (std::size_t f = f0; f < f1; ++f) {
-      const uint32_t a = P.record.axis[f];
-      const Vec3 r = sub(face_centre(g, a, P.record.cell[f]), centre);
-      const double sign = P.record.sign[f], rn = std::sqrt(dot(r, r)), cos_n = sign * r[a] / rn;
-      Vec3 rp = r, rm = r;
-      rp[a] += sign * eps, rm[a] -= sign * eps;
+      const Face face = record_face(P, f);
+      const Vec3 r = sub(face.x, centre);
+      const double sign = P.record.sign[f], rn = std::sqrt(dot(r, r)), cos_n = dot(face.n, r) / rn;
+      const Vec3 rp = add(r, scale(face.n, eps)), rm = sub(r, scale(face.n, eps));
       real_sh(Lmax, r, y.data()), real_sh(Lmax, rp, yp.data()), real_sh(Lmax, rm, ym.data());
       for (std::size_t i = 0; i < nlm; ++i) yp[i] = (yp[i] - ym[i]) / (2 * eps);
       for (std::size_t m = 0; m < J; ++m) {
@@ -128,11 +134,11 @@ void box_field(const Problem& P, const Separated& s, std::size_t m, double k,
     for (std::size_t i = i0; i < i1; ++i) {
       cd sum = 0;
       for (std::size_t f = 0; f < nf; ++f) {
-        const uint32_t a = P.record.axis[f];
-        const Vec3 d = sub(face_centre(g, a, P.record.cell[f]), points[i]);  // y - x
+        const Face face = record_face(P, f);
+        const Vec3 d = sub(face.x, points[i]);  // y - x
         const double rho = std::sqrt(dot(d, d)), sign = P.record.sign[f];
         const cd G = std::exp(cd(0.0, k * rho)) / (4.0 * std::numbers::pi * rho);
-        const cd dG = G * cd(-1.0 / rho, k) * (sign * d[a] / rho);  // dG/dn_y
+        const cd dG = G * cd(-1.0 / rho, k) * (dot(face.n, d) / rho);  // dG/dn_y
         const cd q = cd(0.0, k) * sign * s.w[m * nf + f];
         sum += s.p[m * nf + f] * dG - q * G;
       }

@@ -34,29 +34,101 @@ void layer(double d, double delta, double c, double dt, double lambda, float& a,
 
 struct Built {
   Problem problem;
-  std::vector<double> omega;
+  std::vector<double> omega;  ///< per mode, the frequency the grid is driven at (grid_omega)
+};
+
+// The frequency at which the grid carries a wave of the true wavenumber k = omega / c. The Yee
+// scheme's dispersion, (sin(W dt/2) / (c dt))^2 = sum_a (sin(k_a h/2) / h)^2, makes its waves
+// short (2 % along the axes at 8 cells a wavelength, about 1 % along diagonals): driven at
+// omega, the field around the object would have the wrong wavenumber and its phase would drift
+// between surface and recording box. Driven at W, with the right side averaged over
+// directions, what is left is the scheme's anisotropy (+-0.8 % in k at 8 cells a wavelength).
+double grid_omega(double omega, double c, double h, double dt) {
+  constexpr int kDirections = 64;
+  const double k = omega / c;
+  double sum = 0;
+  for (int i = 0; i < kDirections; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / kDirections, rho = std::sqrt(1 - z * z);
+    const double ph = 2.399963 * i, n[3] = {rho * std::cos(ph), rho * std::sin(ph), z};
+    for (double na : n) sum += std::pow(std::sin(0.5 * k * na * h) / h, 2);
+  }
+  const double s = c * dt * std::sqrt(sum / kDirections);
+  return s < 1 ? 2.0 / dt * std::asin(s) : omega;  // s >= 1: beyond the grid's reach
+}
+
+// Each blocked face's share of each mode, and the modes' velocities over time. A face lying a
+// reach d outside the surface carries the surface's normal velocity delayed by d / c:
+//   -w sin(w (t - d/c)) = cos(w d/c) (-w sin w t) + sin(w d/c) (w cos w t),
+// so each mode drives two series, in phase and in quadrature, the face's amplitudes weighting
+// them by cos and sin of w d / c. q = cos(w t) is a unit modal amplitude (e^(-i w t)), ramped
+// in with a raised cosine over `ramp` seconds.
+void drive_faces(Problem& P, const Soundbank& bank, const Chord& chord,
+                 const std::vector<std::size_t>& which, const std::vector<double>& omega,
+                 const AcousticOptions& o, double dt, double ramp) {
+  const std::size_t J = chord.modes.size(), S = 2 * J, nv = bank.vertices.size();
+  const double c = o.sound_speed, rho_c = o.air_density * c;
+  P.series = S;
+  P.amplitude.assign(P.blocked.size() * S, 0.0f);
+  for (std::size_t j = 0; j < J; ++j) {
+    const float* shape = bank.shapes.data() + which[chord.modes[j]] * nv * 3;
+    const double k = bank.damped_omega(which[chord.modes[j]]) / c;  // true, not the grid's
+    for (std::size_t f = 0; f < P.blocked.size(); ++f) {
+      double in_phase = 0, quadrature = 0;
+      for (uint32_t e = P.blocked.start[f]; e < P.blocked.start[f + 1]; ++e) {
+        const float* u = shape + 3 * std::size_t(P.blocked.vertex[e]);
+        const Vec3 d{P.blocked.direction[e][0], P.blocked.direction[e][1],
+                     P.blocked.direction[e][2]};  // the grid's frame
+        const Vec3 n{dot(P.turn[0], d), dot(P.turn[1], d), dot(P.turn[2], d)};
+        const double v = P.blocked.weight[e] * (u[0] * n[0] + u[1] * n[1] + u[2] * n[2]);
+        const double phase = k * P.blocked.reach[e];
+        in_phase += v * std::cos(phase), quadrature += v * std::sin(phase);
+      }
+      P.amplitude[f * S + 2 * j] = float(rho_c * in_phase);
+      P.amplitude[f * S + 2 * j + 1] = float(rho_c * quadrature);
+    }
+  }
+  P.drive.resize(P.steps * S);
+  for (std::size_t n = 0; n < P.steps; ++n) {
+    const double t = (double(n) + 0.5) * dt;
+    const double r = t < ramp ? 0.5 * (1 - std::cos(std::numbers::pi * t / ramp)) : 1.0;
+    for (std::size_t j = 0; j < J; ++j) {
+      P.drive[n * S + 2 * j] = float(-omega[j] * std::sin(omega[j] * t) * r);
+      P.drive[n * S + 2 * j + 1] = float(omega[j] * std::cos(omega[j] * t) * r);
+    }
+  }
+}
+
+// How the object sits on a grid: x_grid = pivot + rows (x_object - pivot).
+struct Orientation {
+  std::array<Vec3, 3> rows;
+  Vec3 pivot;
 };
 
 Built build(const RadiatingSurface& surface, const Soundbank& bank, const Chord& chord,
             const std::vector<std::size_t>& which, const WaveGridSize& size,
-            const AcousticOptions& o) {
+            const AcousticOptions& o, const Orientation& turn) {
   const WaveOptions& w = o.wave;
   Built out;
   Problem& P = out.problem;
   wave::Grid& g = P.grid;
   g.h = size.h;
   g.n = {uint32_t(size.nx), uint32_t(size.ny), uint32_t(size.nz)};
-  const SurfaceMesh& mesh = surface.mesh();
+  const SurfaceMesh mesh = wave::turned(surface.mesh(), turn.rows, turn.pivot);
+  for (int a = 0; a < 3; ++a)
+    for (int b = 0; b < 3; ++b) P.turn[std::size_t(a)][b] = turn.rows[std::size_t(b)][a];
+  P.pivot = turn.pivot;
   Vec3 lo = mesh.vertices[0], hi = lo;
   for (const Vec3& v : mesh.vertices)
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], v[a]), hi[a] = std::max(hi[a], v[a]);
   // The grid is centred on the bounding box, so a body symmetric about its centre planes is
-  // discretized symmetrically (a staircase that breaks a symmetry makes a spurious field where
-  // the true one cancels, e.g. on the axis of a bowl's cos(n phi) modes). A small fraction of
-  // a cell keeps grid lines off the vertices of axis-aligned meshes.
-  const double jitter[3] = {0.0, 0.0, 0.0345678912};
+  // discretized symmetrically: a staircase that breaks a symmetry makes a spurious field where
+  // the true one cancels (on the axis of a bowl's cos(n phi) modes; and faces whose reach
+  // differs on a bar's two sides fill its nulls). A millionth of a cell keeps cell centres off
+  // surfaces that pass exactly through them (a sphere's poles on a grid centred on it): such a
+  // centre is inside along one axis and outside along another, and its pressure leaks.
+  constexpr double kOffGrid[3] = {0.71e-6, 0.53e-6, 0.37e-6};
   for (int a = 0; a < 3; ++a)
-    g.origin[a] = 0.5 * (lo[a] + hi[a]) - 0.5 * double(g.n[a]) * g.h + jitter[a] * g.h;
+    g.origin[a] = 0.5 * (lo[a] + hi[a]) - (0.5 * double(g.n[a]) - kOffGrid[a]) * g.h;
   const double c = o.sound_speed, dt = size.dt, lambda = c * dt / g.h;
   const double delta = w.pml_cells * g.h;
   for (int a = 0; a < 3; ++a) {
@@ -72,36 +144,12 @@ Built build(const RadiatingSurface& surface, const Soundbank& bank, const Chord&
     }
   }
   P.blocked = wave::block_faces(mesh, g);
-  const std::size_t J = chord.modes.size(), nv = mesh.vertices.size();
-  P.modes = J;
-  P.amplitude.assign(P.blocked.size() * J, 0.0f);
-  const double rho_c = o.air_density * c;
-  for (std::size_t j = 0; j < J; ++j) {
-    const std::size_t mode = which[chord.modes[j]];
-    out.omega.push_back(bank.damped_omega(mode));
-    const float* shape = bank.shapes.data() + mode * nv * 3;
-    for (std::size_t f = 0; f < P.blocked.size(); ++f) {
-      double v = 0;
-      for (uint32_t e = P.blocked.start[f]; e < P.blocked.start[f + 1]; ++e) {
-        const float* u = shape + 3 * std::size_t(P.blocked.vertex[e]);
-        const auto& d = P.blocked.direction[e];
-        v += P.blocked.weight[e] * (u[0] * d[0] + u[1] * d[1] + u[2] * d[2]);
-      }
-      P.amplitude[f * J + j] = float(rho_c * v);
-    }
-  }
-  // Modal velocity of q = cos(w t) (unit amplitude, e^(-i w t)): -w sin(w t), ramped in.
+  for (std::size_t j : chord.modes)
+    out.omega.push_back(grid_omega(bank.damped_omega(which[j]), c, g.h, dt));
   P.steps = size.steps;
   P.first_sample = size.settle_steps;
   P.stride = size.stride;
-  P.drive.resize(P.steps * J);
-  const double ramp = w.ramp_periods / chord.f_min;
-  for (std::size_t n = 0; n < P.steps; ++n) {
-    const double t = (double(n) + 0.5) * dt;
-    const double r = t < ramp ? 0.5 * (1 - std::cos(std::numbers::pi * t / ramp)) : 1.0;
-    for (std::size_t j = 0; j < J; ++j)
-      P.drive[n * J + j] = float(-out.omega[j] * std::sin(out.omega[j] * t) * r);
-  }
+  drive_faces(P, bank, chord, which, out.omega, o, dt, w.ramp_periods / chord.f_min);
   const uint32_t box = uint32_t(w.pml_cells + 2);
   P.record = wave::record_box(g, {box, box, box}, {g.n[0] - box, g.n[1] - box, g.n[2] - box});
   return out;
@@ -123,7 +171,7 @@ struct WaveRun {
   const RadiatingSurface& surface;
   const Soundbank& bank;
   const AcousticOptions& o;
-  double lo[3], hi[3];
+  WaveLayout layout;
   std::vector<ModeTransfer>& modes;
   std::vector<std::vector<std::complex<double>>>& coeffs;
   TransferTimes* times;
@@ -146,35 +194,62 @@ void check_budget(const WaveOptions& w, const WaveGridSize& size, const std::str
   }
 }
 
-// Steps one chord and stores each of its modes (which[chord.modes[j]] in the bank); on a retry
+// One orientation's run of a chord: its problem, separation and multipoles.
+struct TurnRun {
+  Built built;
+  wave::Separated sep;
+  std::vector<std::vector<cd>> c;  ///< regular-wave coefficients per mode
+};
+
+TurnRun run_turn(WaveRun& r, const Chord& chord, const std::vector<std::size_t>& which,
+                 const WaveGridSize& size, const Orientation& turn, const std::vector<double>& ks,
+                 const std::vector<int>& Ls) {
+  auto t0 = std::chrono::steady_clock::now();
+  TurnRun out{build(r.surface, r.bank, chord, which, size, r.o, turn), {}, {}};
+  if (r.times) r.times->matrix += seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  std::vector<float> samples;
+  r.stepper.run(out.built.problem, samples, {});
+  if (r.times) r.times->solve += seconds_since(t0);
+  t0 = std::chrono::steady_clock::now();
+  out.sep = wave::separate(out.built.problem, samples, out.built.omega, size.dt);
+  out.c = wave::box_multipoles(out.built.problem, out.sep, ks, r.surface.centre(), Ls,
+                               r.o.wave.threads);
+  if (r.times) r.times->expand += seconds_since(t0);
+  return out;
+}
+
+// Steps one chord in every orientation and stores each of its modes (which[chord.modes[j]] in
+// the bank): the mean of the orientations' expansions, whose staircase errors differ (turned by
+// 90 / turns degrees about the axis of near symmetry, a field's coupling through the grid's
+// four-fold symmetry, cos n phi to n +- 4, changes sign and cancels in the mean). On a retry
 // only where the new separation is better than the stored one.
 void solve_chord(WaveRun& r, const Chord& chord, const std::vector<std::size_t>& which,
                  const WaveGridSize& size, uint16_t number, bool retry) {
   const AcousticOptions& o = r.o;
   const RadiatingSurface& surface = r.surface;
-  auto t0 = std::chrono::steady_clock::now();
-  const Built built = build(surface, r.bank, chord, which, size, o);
-  if (r.times) r.times->matrix += seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
-  std::vector<float> samples;
-  r.stepper.run(built.problem, samples, {});
-  if (r.times) r.times->solve += seconds_since(t0);
-  t0 = std::chrono::steady_clock::now();
-  const wave::Separated sep = wave::separate(built.problem, samples, built.omega, size.dt);
   std::vector<double> ks;
   std::vector<int> Ls;
-  for (double w : built.omega) {
-    ks.push_back(w / o.sound_speed);
+  for (std::size_t j = 0; j < chord.modes.size(); ++j) {
+    ks.push_back(r.bank.damped_omega(which[chord.modes[j]]) / o.sound_speed);
     Ls.push_back(expansion_order(ks.back(), surface.radius(), o));
   }
-  std::vector<std::vector<cd>> cs =
-      wave::box_multipoles(built.problem, sep, ks, surface.centre(), Ls, o.wave.threads);
+  std::vector<TurnRun> runs;
+  for (const auto& rows : r.layout.turns)
+    runs.push_back(run_turn(r, chord, which, size, {rows, r.layout.pivot}, ks, Ls));
+  const auto t0 = std::chrono::steady_clock::now();
+  const double share = 1.0 / double(runs.size());
   for (std::size_t j = 0; j < chord.modes.size(); ++j) {
     const std::size_t i = which[chord.modes[j]];
-    if (retry && !(sep.error[j] < r.modes[i].held_out_error)) continue;
+    double error = 0, residual = 0;
+    for (const TurnRun& t : runs)
+      error = std::max(error, t.sep.error[j]), residual = std::max(residual, t.sep.residual);
+    if (retry && !(error < r.modes[i].held_out_error)) continue;
     const double k = ks[j];
     const int L = Ls[j];
-    std::vector<cd>& c = cs[j];
+    std::vector<cd> c(runs[0].c[j].size(), cd(0.0));
+    for (const TurnRun& t : runs)
+      for (std::size_t q = 0; q < c.size(); ++q) c[q] += share * t.c[j][q];
     std::vector<cd> h(std::size_t(L) + 1);
     sph_hankel1(L, k * surface.radius(), h.data());
     for (int l = 0; l <= L; ++l)
@@ -184,13 +259,18 @@ void solve_chord(WaveRun& r, const Chord& chord, const std::vector<std::size_t>&
         [&](const std::vector<Vec3>& pts, cd* out) {
           std::vector<Vec3> abs(pts.size());
           for (std::size_t q = 0; q < pts.size(); ++q) abs[q] = add(pts[q], surface.centre());
-          wave::box_field(built.problem, sep, j, k, abs, out, o.wave.threads);
+          std::vector<cd> one(pts.size());
+          std::fill(out, out + pts.size(), cd(0.0));
+          for (const TurnRun& t : runs) {
+            wave::box_field(t.built.problem, t.sep, j, k, abs, one.data(), o.wave.threads);
+            for (std::size_t q = 0; q < pts.size(); ++q) out[q] += share * one[q];
+          }
         },
         kWaveCheckPoints);
     mt.method = TransferMethod::Wave;
     mt.sources = uint32_t(std::min<std::size_t>(size.cells(), UINT32_MAX));
-    mt.fit_residual = float(sep.residual);
-    mt.held_out_error = float(sep.error[j]);
+    mt.fit_residual = float(residual);
+    mt.held_out_error = float(error);
     mt.iterations = number;
     r.modes[i] = mt;
     r.coeffs[i] = std::move(c);
@@ -212,15 +292,18 @@ void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& ban
                            const std::function<void(const std::string&)>& note) {
   if (which.empty()) return;
   std::unique_ptr<wave::Stepper> stepper = wave::make_stepper(o.wave);
-  WaveRun r{surface, bank, o, {}, {}, modes, coeffs, times, *stepper};
-  const SurfaceMesh& mesh = surface.mesh();
-  for (int a = 0; a < 3; ++a) r.lo[a] = r.hi[a] = mesh.vertices[0][a];
-  for (const Vec3& v : mesh.vertices)
-    for (int a = 0; a < 3; ++a)
-      r.lo[a] = std::min(r.lo[a], v[a]), r.hi[a] = std::max(r.hi[a], v[a]);
+  WaveRun r{surface, bank, o, wave_layout(surface.mesh(), o.wave), modes, coeffs, times, *stepper};
+  if (note && r.layout.turns.size() > 1) {
+    char buf[160];
+    std::snprintf(buf, sizeof buf,
+                  "%zu orientations about the %c axis (cos 4 phi content of the surface %.3f)",
+                  r.layout.turns.size(), "xyz"[r.layout.axis], r.layout.fourfold);
+    note(buf);
+  }
   // Settling beyond the ramp: about twice the padded object's diagonal, crossed at c.
   double span = 0;
-  for (int a = 0; a < 3; ++a) span += (r.hi[a] - r.lo[a]) * (r.hi[a] - r.lo[a]);
+  for (int a = 0; a < 3; ++a)
+    span += (r.layout.hi[a] - r.layout.lo[a]) * (r.layout.hi[a] - r.layout.lo[a]);
   const double settle = 3.0 * std::sqrt(span) / o.sound_speed;
   auto hz_of = [&](const std::vector<std::size_t>& list) {
     std::vector<double> hz;
@@ -232,7 +315,7 @@ void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& ban
   for (std::size_t ci = 0; ci < chords.size(); ++ci) {
     const Chord& chord = chords[ci];
     const WaveGridSize size =
-        wave_grid_size(r.lo, r.hi, chord, o.sound_speed, surface.area(), o.wave);
+        wave_grid_size(r.layout, chord, o.sound_speed, surface.area(), o.wave);
     const std::string label = chord_note(ci, chords.size(), chord, size);
     check_budget(o.wave, size, label);
     if (note) note(label);
@@ -250,7 +333,7 @@ void compute_transfer_wave(const RadiatingSurface& surface, const Soundbank& ban
   for (std::size_t ci = 0; ci < again.size(); ++ci) {
     const Chord& chord = again[ci];
     const WaveGridSize size =
-        wave_grid_size(r.lo, r.hi, chord, o.sound_speed, surface.area(), o.wave);
+        wave_grid_size(r.layout, chord, o.sound_speed, surface.area(), o.wave);
     const std::string label = "weak modes again, " + chord_note(ci, again.size(), chord, size);
     check_budget(o.wave, size, label);
     if (note) note(label);

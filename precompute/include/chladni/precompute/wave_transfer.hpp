@@ -10,11 +10,15 @@
 // object are separated per mode by least squares against the chord's sinusoids, and each mode's
 // far field follows from the Kirchhoff-Helmholtz integral over that box as multipoles
 // (core/transfer.hpp), like the boundary-element path's. docs/transfer.md has the rules.
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
+
+#include "chladni/core/vec3.hpp"
+#include "chladni/precompute/surface_mesh.hpp"
 
 namespace chladni::gpu {
 class Context;
@@ -41,6 +45,11 @@ struct WaveOptions {
   /// this are stepped again among themselves: a mode that barely radiates, beside loud ones,
   /// drowns in their residue. The better separation is kept. 0: no second pass.
   double retry_separation = 0.1;
+  /// Orientations of the object against the grid, turned 90 / grid_turns degrees apart about
+  /// its axis of near symmetry; the expansions are averaged. Each costs a run. Two cancel the
+  /// staircase's coupling through the grid's four-fold symmetry (a bowl's cos 3 phi and cos 4
+  /// phi modes leaking onto its axis).
+  int grid_turns = 2;
   /// Bytes a grid may take (0: no limit); a mode whose grid exceeds it is not solved this way.
   double max_memory = 0;
   /// Most cells x steps one chord may take (2e11: about 4 minutes of the CPU stepper on two
@@ -73,11 +82,30 @@ struct WaveGridSize {
   std::size_t steps = 0;  ///< settle + fit window
   std::size_t settle_steps = 0;
   std::size_t stride = 1;  ///< steps between recorded samples
+  std::size_t turns = 1;   ///< runs, one per orientation
   double bytes = 0;        ///< estimated peak memory of the solve
   std::size_t cells() const { return nx * ny * nz; }
-  double cell_steps() const { return double(cells()) * double(steps); }
+  double cell_steps() const { return double(cells()) * double(steps) * double(turns); }
 };
-WaveGridSize wave_grid_size(const double lo[3], const double hi[3], const Chord& chord,
-                            double sound_speed, double surface_area, const WaveOptions& options);
+
+/// How an object sits on its grids: the orientations it is stepped in and the box that holds it
+/// in all of them.
+struct WaveLayout {
+  /// Object to grid, x_grid = pivot + rows (x - pivot), one per orientation: the object turned
+  /// 90 / turns degrees apart about `axis`.
+  std::vector<std::array<Vec3, 3>> turns;
+  int axis = 2;             ///< the coordinate axis nearest the surface's axis of near symmetry
+  double fourfold = 0;      ///< the surface's cos 4 phi content about it (0: a body of revolution)
+  Vec3 pivot{0, 0, 0};      ///< the object's bounding-box centre
+  double lo[3]{}, hi[3]{};  ///< bounding box over all orientations (m)
+};
+/// options.grid_turns orientations where the surface is nearly of revolution about a coordinate
+/// axis (fourfold <= 0.05), else one: turning a body that has a four-fold shape of its own (a
+/// square bar) changes its staircase, not only the grid's. Throws InputError on an empty mesh.
+WaveLayout wave_layout(const SurfaceMesh& mesh, const WaveOptions& options);
+
+/// The grid a chord needs (one per orientation).
+WaveGridSize wave_grid_size(const WaveLayout& layout, const Chord& chord, double sound_speed,
+                            double surface_area, const WaveOptions& options);
 
 }  // namespace chladni::precompute
