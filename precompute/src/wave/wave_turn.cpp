@@ -13,18 +13,22 @@ namespace chladni::precompute::wave {
 
 namespace {
 
-// Bodies whose cos 4 phi content about the axis is at most this are turned (a bowl, a bell, a
-// sphere: 0; a gear, a rotor: 0.01-0.02); a square bar reads 0.12, a shaft coupling 0.09.
+// Bodies whose cos 4 phi content about the axis, and the relative difference of the two other
+// principal moments, are at most this are turned (a bowl, a bell, a sphere: 0; a gear, a rotor:
+// 0.01-0.02). A square bar reads 0.12 in cos 4 phi, a shaft coupling 0.09; the cow has little
+// cos 4 phi content but is no body of revolution (its moments differ).
 constexpr double kNearRevolution = 0.05;
 
 struct Moments {
   int axis = 2;
   double fourfold = 0;
+  double roundness = 0;  ///< |difference| / sum of the other two principal moments
 };
 
 // The principal axis of the surface's second moment (triangle centroids weighted by area) whose
-// eigenvalue stands apart from the other two, snapped to the nearest coordinate axis, and the
-// surface's |sum w r e^(4 i phi)| / sum w r about the axis through the centroid.
+// eigenvalue stands apart from the other two, snapped to the nearest coordinate axis; how far
+// apart those two are; and the surface's |sum w r e^(4 i phi)| / sum w r about the axis through
+// the centroid.
 Moments moments(const SurfaceMesh& mesh) {
   std::vector<std::pair<Eigen::Vector3d, double>> parts;
   parts.reserve(mesh.triangles.size());
@@ -44,7 +48,10 @@ Moments moments(const SurfaceMesh& mesh) {
   for (const auto& [x, w] : parts) m += w * (x - mean) * (x - mean).transpose();
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(m);
   const Eigen::Vector3d l = es.eigenvalues();  // ascending
-  const Eigen::Vector3d v = es.eigenvectors().col(l[1] - l[0] > l[2] - l[1] ? 0 : 2);
+  const bool low = l[1] - l[0] > l[2] - l[1];
+  const Eigen::Vector3d v = es.eigenvectors().col(low ? 0 : 2);
+  const double p = low ? l[1] : l[0], q = low ? l[2] : l[1];
+  out.roundness = p + q > 0 ? (q - p) / (p + q) : 0.0;
   for (int a = 0; a < 3; ++a)
     if (std::abs(v[a]) > std::abs(v[out.axis]) + 1e-9) out.axis = a;
   const int u = (out.axis + 1) % 3, w = (out.axis + 2) % 3;
@@ -91,7 +98,9 @@ WaveLayout wave_layout(const SurfaceMesh& mesh, const WaveOptions& options) {
   out.pivot = scale(add(lo, hi), 0.5);
   const wave::Moments m = wave::moments(mesh);
   out.axis = m.axis, out.fourfold = m.fourfold;
-  const int n = m.fourfold <= wave::kNearRevolution ? std::max(1, options.grid_turns) : 1;
+  const bool revolution =
+      m.fourfold <= wave::kNearRevolution && m.roundness <= wave::kNearRevolution;
+  const int n = revolution ? std::max(1, options.grid_turns) : 1;
   for (int a = 0; a < 3; ++a) out.lo[a] = lo[a], out.hi[a] = hi[a];
   for (int t = 0; t < n; ++t) {
     out.turns.push_back(wave::turn_rows(m.axis, 0.5 * std::numbers::pi * t / n));

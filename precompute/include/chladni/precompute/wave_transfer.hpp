@@ -100,8 +100,10 @@ struct WaveLayout {
   double lo[3]{}, hi[3]{};  ///< bounding box over all orientations (m)
 };
 /// options.grid_turns orientations where the surface is nearly of revolution about a coordinate
-/// axis (fourfold <= 0.05), else one: turning a body that has a four-fold shape of its own (a
-/// square bar) changes its staircase, not only the grid's. Throws InputError on an empty mesh.
+/// axis (fourfold <= 0.05, and its two other principal moments within 5 %), else one: turning a
+/// body that has a four-fold shape of its own (a square bar) changes its staircase, not only the
+/// grid's, and a body of no symmetry gains too little for twice the work. Throws InputError on
+/// an empty mesh.
 WaveLayout wave_layout(const SurfaceMesh& mesh, const WaveOptions& options);
 
 /// The grid a chord needs (one per orientation).
