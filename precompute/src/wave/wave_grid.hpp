@@ -15,6 +15,12 @@
 
 namespace chladni::precompute::wave {
 
+/// x turned about `pivot`: pivot + rows (x - pivot).
+inline Vec3 turn_point(const std::array<Vec3, 3>& rows, const Vec3& pivot, const Vec3& x) {
+  const Vec3 d = sub(x, pivot);
+  return {pivot[0] + dot(rows[0], d), pivot[1] + dot(rows[1], d), pivot[2] + dot(rows[2], d)};
+}
+
 struct Grid {
   Vec3 origin{0, 0, 0};  ///< corner of cell (0, 0, 0)
   double h = 0;
@@ -75,7 +81,7 @@ struct Problem {
   std::array<std::vector<float>, 3> pa, pb, wa, wb;
   /// Cells in [pml_lo, pml_hi) along every axis are outside the layer (no split fields).
   std::array<uint32_t, 3> pml_lo{0, 0, 0}, pml_hi{0, 0, 0};
-  BlockedFaces blocked;
+  BlockedFaces blocked;  ///< with its directions turned into the object's frame
   /// Drive series: a blocked face's w is sum over series of amplitude x drive. Two per mode, in
   /// phase and in quadrature, so that each face can carry its own delay.
   std::size_t series = 0;
@@ -89,10 +95,7 @@ struct Problem {
   /// rotation. Identity unless the object was turned against the grid.
   std::array<Vec3, 3> turn{Vec3{1, 0, 0}, Vec3{0, 1, 0}, Vec3{0, 0, 1}};
   Vec3 pivot{0, 0, 0};
-  Vec3 to_object(const Vec3& x) const {
-    const Vec3 d = sub(x, pivot);
-    return {pivot[0] + dot(turn[0], d), pivot[1] + dot(turn[1], d), pivot[2] + dot(turn[2], d)};
-  }
+  Vec3 to_object(const Vec3& x) const { return turn_point(turn, pivot, x); }
   /// The grid's axis `a` in the object's frame (a column of turn).
   Vec3 axis_in_object(uint32_t a) const { return {turn[0][a], turn[1][a], turn[2][a]}; }
   std::size_t samples() const {

@@ -56,7 +56,8 @@ double grid_omega(double omega, double c, double h, double dt) {
   return s < 1 ? 2.0 / dt * std::asin(s) : omega;  // s >= 1: beyond the grid's reach
 }
 
-// Each blocked face's share of each mode, and the modes' velocities over time. A face lying a
+// Each blocked face's share of each mode (its directions already in the object's frame, where
+// the shapes are), and the modes' velocities over time. A face lying a
 // reach d outside the surface carries the surface's normal velocity delayed by d / c:
 //   -w sin(w (t - d/c)) = cos(w d/c) (-w sin w t) + sin(w d/c) (w cos w t),
 // so each mode drives two series, in phase and in quadrature, the face's amplitudes weighting
@@ -76,9 +77,7 @@ void drive_faces(Problem& P, const Soundbank& bank, const Chord& chord,
       double in_phase = 0, quadrature = 0;
       for (uint32_t e = P.blocked.start[f]; e < P.blocked.start[f + 1]; ++e) {
         const float* u = shape + 3 * std::size_t(P.blocked.vertex[e]);
-        const Vec3 d{P.blocked.direction[e][0], P.blocked.direction[e][1],
-                     P.blocked.direction[e][2]};  // the grid's frame
-        const Vec3 n{dot(P.turn[0], d), dot(P.turn[1], d), dot(P.turn[2], d)};
+        const auto& n = P.blocked.direction[e];
         const double v = P.blocked.weight[e] * (u[0] * n[0] + u[1] * n[1] + u[2] * n[2]);
         const double phase = k * P.blocked.reach[e];
         in_phase += v * std::cos(phase), quadrature += v * std::sin(phase);
@@ -144,6 +143,10 @@ Built build(const RadiatingSurface& surface, const Soundbank& bank, const Chord&
     }
   }
   P.blocked = wave::block_faces(mesh, g);
+  for (auto& d : P.blocked.direction) {  // into the object's frame, once for every mode
+    const Vec3 x{d[0], d[1], d[2]};
+    d = {float(dot(P.turn[0], x)), float(dot(P.turn[1], x)), float(dot(P.turn[2], x))};
+  }
   for (std::size_t j : chord.modes)
     out.omega.push_back(grid_omega(bank.damped_omega(which[j]), c, g.h, dt));
   P.steps = size.steps;

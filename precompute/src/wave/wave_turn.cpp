@@ -78,10 +78,7 @@ std::array<Vec3, 3> turn_rows(int axis, double angle) {
 
 SurfaceMesh turned(const SurfaceMesh& mesh, const std::array<Vec3, 3>& rows, const Vec3& pivot) {
   SurfaceMesh out = mesh;
-  for (Vec3& x : out.vertices) {
-    const Vec3 d = sub(x, pivot);
-    x = {pivot[0] + dot(rows[0], d), pivot[1] + dot(rows[1], d), pivot[2] + dot(rows[2], d)};
-  }
+  for (Vec3& x : out.vertices) x = turn_point(rows, pivot, x);
   return out;
 }
 
@@ -105,9 +102,11 @@ WaveLayout wave_layout(const SurfaceMesh& mesh, const WaveOptions& options) {
   for (int t = 0; t < n; ++t) {
     out.turns.push_back(wave::turn_rows(m.axis, 0.5 * std::numbers::pi * t / n));
     if (t == 0) continue;
-    for (const Vec3& v : wave::turned(mesh, out.turns.back(), out.pivot).vertices)
+    for (const Vec3& x : mesh.vertices) {
+      const Vec3 v = wave::turn_point(out.turns.back(), out.pivot, x);
       for (int a = 0; a < 3; ++a)
         out.lo[a] = std::min(out.lo[a], v[a]), out.hi[a] = std::max(out.hi[a], v[a]);
+    }
   }
   return out;
 }
