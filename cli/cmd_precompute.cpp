@@ -70,7 +70,8 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                       {"max_tet_volume_m3", r.max_tet_volume},
                       {"max_radius_edge", r.quality.max_radius_edge},
                       {"mean_radius_edge", r.quality.mean_radius_edge},
-                      {"min_dihedral_deg", r.quality.min_dihedral_deg}};
+                      {"min_dihedral_deg", r.quality.min_dihedral_deg},
+                      {"max_dihedral_deg", r.quality.max_dihedral_deg}};
   j["eigen"] = {{"factorization", r.eigen.factorization},
                 {"blas_kernels", precompute::blas_core_name()},
                 {"rigid_removed", r.eigen.rigid_removed},
@@ -208,9 +209,9 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
               bank.material.density, bank.material.damping.to_string().c_str());
   std::printf(
       "tetrahedra %zu (P%d, %zu nodes, %zu DOFs, max volume %.3g m^3); quality: radius-edge max "
-      "%.2f mean %.2f, min dihedral %.1f deg\n",
+      "%.2f mean %.2f, dihedral angles %.1f-%.1f deg\n",
       r.tets, a.order, r.nodes, r.dofs, r.max_tet_volume, r.quality.max_radius_edge,
-      r.quality.mean_radius_edge, r.quality.min_dihedral_deg);
+      r.quality.mean_radius_edge, r.quality.min_dihedral_deg, r.quality.max_dihedral_deg);
   std::string stopped = r.eigen.capped ? " (stopped at --mode-cap before --max-freq)" : "";
   if (a.max_modes > 0 && r.computed - r.below_band < a.max_modes)
     stopped = " (of the " + std::to_string(a.max_modes) + " asked for, those below --max-freq)";

@@ -34,6 +34,7 @@ heavy+='CliRadiate\.SphereHarmonicMatchesTheExactSolution|'
 heavy+='ModeError\.(BracketsTheBarsErrorAndRefinementMeetsTheTolerance|'
 heavy+='LocalRefinementMeetsTheToleranceOnAThinFin|RefinementOverTheBudgetTakesASmallerStep)|'
 heavy+='BemAssets\.BowlLowestModesByBemAndAudibleAtTheirPredictedLevel|ThinRadiator\..*|WaveTransfer\.SphereHarmonicsAtKa30|'
+heavy+='ThinBody\.PoorlyShapedFirstMeshIsReplacedByAQualityMesh|'
 heavy+='RepairLadder\.(SelfIntersectingSoupBecomesASolidOrIsRefused|WrappedBarRingsLikeTheCleanBar))$'
 preload=""
 lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -n 1 || true)

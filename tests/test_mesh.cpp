@@ -405,6 +405,37 @@ TEST(Tetrahedralize, FlatMeshesAreMadeAgainWithPointsOnTheSurface) {
   }
 }
 
+// Where the surface's triangles leave most -Y tetrahedra poorly shaped (the CAD rotor's mean
+// radius-edge ratio is 6.5, against 1.05-1.35 for meshes from good surfaces), a mesh asked to mend
+// that is made with points on the surface, and a well-shaped -Y mesh (the bar's) is kept as it is.
+TEST(Tetrahedralize, PoorlyShapedMeshesAreMadeAgainWithPointsOnTheSurface) {
+  const SurfaceMesh rotor = read_mesh(kMeshes + "/rotor.obj");
+  TetOptions keep;  // by default, only flatness asks for a second mesh
+  keep.max_volume = coarse_max_volume(rotor);
+  const TetQuality y = tet_quality(tetrahedralize(rotor, keep));
+  ASSERT_GT(y.mean_radius_edge, 3.0);
+  TetOptions o;
+  o.max_volume = keep.max_volume;
+  o.poor_mean_radius_edge = kPoorMeanRadiusEdge;
+  bool shown = false;
+  o.before_remesh = [&](const TetMesh&) { shown = true; };
+  const TetMesh t = tetrahedralize(rotor, o);
+  const TetQuality q = tet_quality(t);
+  EXPECT_TRUE(shown);
+  EXPECT_LT(q.mean_radius_edge, 1.5);
+  EXPECT_GT(t.surface_vertices, rotor.vertices.size());
+  EXPECT_NEAR(q.volume, y.volume, 1e-6 * y.volume);
+
+  const SurfaceMesh bar = read_mesh(kMeshes + "/bar.obj");
+  TetOptions b;
+  b.max_volume = 2e-7;
+  b.poor_mean_radius_edge = kPoorMeanRadiusEdge;
+  b.before_remesh = [](const TetMesh&) { FAIL() << "the bar's -Y mesh is well shaped"; };
+  const TetMesh tb = tetrahedralize(bar, b);
+  EXPECT_EQ(tb.surface_vertices, bar.vertices.size());
+  EXPECT_LT(tet_quality(tb).mean_radius_edge, 1.5);
+}
+
 // A CAD box exports each face as two triangles: a 0.4 m x 4 mm face gives needles. Splitting
 // them alone keeps needles (about 50,000 tetrahedra with dihedral angles of 0.1 degrees here);
 // flipped within their plane they become a strip of well-shaped triangles, and the solid a few
@@ -437,6 +468,19 @@ TEST(Tetrahedralize, NeedleTrianglesOfACadBoxAreReshapedWithinTheirPlanes) {
       on += std::abs(t.nodes[v][k]) < 1e-15 || std::abs(t.nodes[v][k] - size[k]) < 1e-15;
     ASSERT_GE(on, 1) << "surface node " << v;
   }
+}
+
+// The corner tetrahedron of a cube: right angles at its three axis edges, acos(1/sqrt 3) at the
+// others, and radius-edge sqrt(3)/2 / 1.
+TEST(Tetrahedralize, QualityOfACornerTetrahedron) {
+  TetMesh m;
+  m.nodes = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  m.tets = {{0, 1, 2, 3}};
+  const TetQuality q = tet_quality(m);
+  EXPECT_NEAR(q.min_dihedral_deg, std::acos(1 / std::sqrt(3.0)) * 180 / std::numbers::pi, 1e-9);
+  EXPECT_NEAR(q.max_dihedral_deg, 90, 1e-9);
+  EXPECT_NEAR(q.max_radius_edge, std::sqrt(3.0) / 2, 1e-12);
+  EXPECT_NEAR(q.volume, 1.0 / 6, 1e-15);
 }
 
 TEST(Tetrahedralize, AutoSizeShrinksWithFrequencyAndOrder) {

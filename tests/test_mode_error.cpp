@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "../precompute/src/fem/surface_sample.hpp"
+#include "../precompute/src/tets/tetgen_child.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/eigensolve.hpp"
 #include "chladni/precompute/fem.hpp"
@@ -393,4 +394,24 @@ TEST(ModeError, TetGenAbortIsAnErrorNotACrash) {
   unsetenv("CHLADNI_TEST_TETGEN_ABORT");
   EXPECT_GT(tetrahedralize(box, t).tets.size(), 100u);
   EXPECT_GT(refine_tets(coarse, bounds, t).tets.size(), coarse.tets.size());
+}
+
+// A child that never finishes (TetGen's quality loop on some surfaces) is stopped by its CPU
+// limit and reported as such; within the limit its mesh comes back.
+TEST(ModeError, TetGenChildIsStoppedAtItsCpuLimit) {
+  std::string crash;
+  const auto spin = [] {
+    volatile double x = 0;
+    for (;;) x = x + 1;
+    return TetMesh{};
+  };
+  EXPECT_FALSE(tetgen_isolated(spin, crash, 0, 1).has_value());
+  EXPECT_NE(crash.find("ran past its 1 s of CPU time"), std::string::npos) << crash;
+  TetMesh one;
+  one.nodes = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  one.tets = {{0, 1, 2, 3}};
+  const auto m = tetgen_isolated([&] { return one; }, crash, 0, 30);
+  ASSERT_TRUE(m.has_value()) << crash;
+  EXPECT_EQ(m->nodes, one.nodes);
+  EXPECT_EQ(m->tets, one.tets);
 }

@@ -252,3 +252,29 @@ TEST(ThinBody, SquareBarTorsionWithinTheToleranceAtDefaults) {
     EXPECT_LT(nearest / f, o.tolerance) << "torsion " << n << ": Saint-Venant " << f << " Hz";
   }
 }
+
+// The rotor's first mesh under -Y is poorly shaped (mean radius-edge ratio 6.5) and far off
+// (24 %): its refinement is replaced by the solid meshed again with points on its surface, a
+// well-shaped mesh far smaller than that refinement and closer to the tolerance. The modes are
+// still sampled on the first mesh's surface.
+TEST(ThinBody, PoorlyShapedFirstMeshIsReplacedByAQualityMesh) {
+  const SurfaceMesh rotor = read_mesh(std::string(CHLADNI_SHARED_MESHES) + "/rotor.obj");
+  PrecomputeOptions o;
+  o.max_modes = 4;
+  o.max_passes = 2;
+  o.transfer = false;
+  PrecomputeReport r;
+  std::string notes;
+  Progress p;
+  p.note = [&](const std::string& s) { notes += s + "\n"; };
+  const Soundbank b = precompute_surface(rotor, "rotor", o, r, p);
+  ASSERT_EQ(r.passes.size(), 2u);
+  EXPECT_NE(notes.find("replaces its refinement"), std::string::npos) << notes;
+  EXPECT_GT(r.passes[0].worst_error, 8 * o.tolerance);
+  EXPECT_LT(r.passes[1].worst_error, r.passes[0].worst_error / 4);
+  EXPECT_LT(r.passes[1].tets, 60000u);
+  EXPECT_LT(r.quality.mean_radius_edge, kPoorMeanRadiusEdge);
+  // The first mesh's boundary: the input with its long edges split (688 vertices), not the
+  // remeshed solid's several thousand.
+  EXPECT_LT(b.vertices.size(), rotor.vertices.size() * 3 / 2);
+}

@@ -9,6 +9,7 @@
 
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -64,7 +65,7 @@ void limit_memory(double allowance) {
 }  // namespace
 
 std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std::string& crash,
-                                       double allowance) {
+                                       double allowance, double cpu_seconds) {
   int fd[2];
   if (pipe(fd) != 0) return job();  // no isolation to be had: run in-process
   const pid_t pid = fork();
@@ -84,6 +85,10 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
     const bool from_env = !(allowance > 0);  // else the caller's, from the mesh asked for
     if (from_env) allowance = memory_allowance();
     limit_memory(allowance);
+    if (cpu_seconds > 0) {
+      const rlimit cpu{rlim_t(std::ceil(cpu_seconds)), rlim_t(std::ceil(cpu_seconds)) + 1};
+      setrlimit(RLIMIT_CPU, &cpu);
+    }
     char over[96];
     std::snprintf(over, sizeof over, "its %.3g GB allowance%s", allowance / 1e9,
                   from_env ? " (CHLADNI_TETGEN_MEMORY_GB)" : "");
@@ -128,9 +133,11 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
   while (waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
   }
   if (WIFSIGNALED(wstatus) || !WIFEXITED(wstatus) || WEXITSTATUS(wstatus) != 0 || bytes.empty()) {
-    crash = WIFSIGNALED(wstatus)
-                ? std::string("an internal error, signal ") + std::to_string(WTERMSIG(wstatus))
-                : std::string("its process ended early");
+    const int sig = WIFSIGNALED(wstatus) ? WTERMSIG(wstatus) : 0;
+    crash = sig == SIGXCPU ? "it ran past its " + std::to_string(int(std::ceil(cpu_seconds))) +
+                                 " s of CPU time"
+            : sig ? std::string("an internal error, signal ") + std::to_string(sig)
+                  : std::string("its process ended early");
     return std::nullopt;
   }
   if (bytes[0] == 1) throw InputError(std::string(bytes.begin() + 1, bytes.end()));

@@ -209,6 +209,35 @@ TetMesh run_tetgen_refine(const TetMesh& m, const std::vector<double>& bound, co
   return r;
 }
 
+// Without -Y TetGen's quality refinement can loop on some fine surfaces (a scanned figure ran
+// 6 minutes without end), so the optional second mesh runs under a CPU limit; past it the -Y
+// mesh stands.
+constexpr double kRemeshCpuSeconds = 60;
+
+// The -Y mesh `m`, or where it is flat or poorly shaped, the mesh with points added on the
+// surface if that is better by the same measure.
+TetMesh remesh_if_poor(const SurfaceMesh& s, const TetOptions& tries, const TetOptions& o,
+                       TetMesh m) {
+  const TetQuality q = tet_quality(m);
+  const bool flat = q.min_dihedral_deg < o.flat_dihedral_deg;
+  const bool poor = q.mean_radius_edge > o.poor_mean_radius_edge;
+  if (!flat && !poor) return m;
+  if (o.before_remesh) o.before_remesh(m);
+  std::string ignored;
+  std::optional<TetMesh> steiner;
+  try {
+    steiner =
+        tetgen_isolated([&] { return run_tetgen(s, tries, false); }, ignored, 0, kRemeshCpuSeconds);
+  } catch (const InputError&) {
+    // the -Y mesh stands
+  }
+  if (!steiner) return m;
+  const TetQuality sq = tet_quality(*steiner);
+  const bool better =
+      flat ? sq.min_dihedral_deg > q.min_dihedral_deg : sq.mean_radius_edge < q.mean_radius_edge;
+  return better ? std::move(*steiner) : m;
+}
+
 }  // namespace
 
 std::vector<std::array<uint32_t, 3>> boundary_faces(const TetMesh& m) {
@@ -259,20 +288,8 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
   TetOptions tries = o;
   for (int attempt = 0;; ++attempt) {
     std::string crash;
-    if (auto m = tetgen_isolated([&] { return run_tetgen(s, tries, true); }, crash)) {
-      const double worst = tet_quality(*m).min_dihedral_deg;
-      if (!(worst < o.flat_dihedral_deg)) return std::move(*m);
-      if (o.before_remesh) o.before_remesh(*m);
-      std::string ignored;
-      std::optional<TetMesh> steiner;
-      try {
-        steiner = tetgen_isolated([&] { return run_tetgen(s, tries, false); }, ignored);
-      } catch (const InputError&) {
-        // the -Y mesh stands
-      }
-      if (steiner && tet_quality(*steiner).min_dihedral_deg > worst) return std::move(*steiner);
-      return std::move(*m);
-    }
+    if (auto m = tetgen_isolated([&] { return run_tetgen(s, tries, true); }, crash))
+      return remesh_if_poor(s, tries, o, std::move(*m));
     if (attempt == 2 || tries.max_volume <= 0)
       throw InputError("TetGen failed on this surface (" + crash +
                        "); try another --max-tet-volume or --tolerance, or --repair");
@@ -349,8 +366,9 @@ TetQuality tet_quality(const TetMesh& m) {
       const double du = dot(u, d) / dot(d, d), dw = dot(w, d) / dot(d, d);
       for (int k = 0; k < 3; ++k) u[k] -= du * d[k], w[k] -= dw * d[k];
       const double cosang = dot(u, w) / std::sqrt(dot(u, u) * dot(w, w));
-      q.min_dihedral_deg = std::min(
-          q.min_dihedral_deg, std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / std::numbers::pi);
+      const double deg = std::acos(std::clamp(cosang, -1.0, 1.0)) * 180 / std::numbers::pi;
+      q.min_dihedral_deg = std::min(q.min_dihedral_deg, deg);
+      q.max_dihedral_deg = std::max(q.max_dihedral_deg, deg);
     }
   }
   if (!m.tets.empty()) q.mean_radius_edge /= double(m.tets.size());

@@ -1,6 +1,7 @@
 #pragma once
 // Volume meshing with TetGen (only tetrahedralize.cpp includes tetgen.h).
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -16,8 +17,9 @@ struct TetMesh {
   std::vector<std::array<uint32_t, 4>> tets;  ///< positively oriented
   /// nodes[0, surface_vertices) are the input surface's vertices in their order: TetGen runs with
   /// -Y (no Steiner points on the surface; without it TetGen 1.5 can abort on poor surfaces).
-  /// Where -Y leaves tetrahedra flatter than TetOptions::flat_dihedral_deg, tetrahedralize
-  /// meshes again with points added on the surface, numbered next.
+  /// Where -Y leaves tetrahedra flat or poorly shaped (TetOptions::flat_dihedral_deg,
+  /// poor_mean_radius_edge), tetrahedralize meshes again with points added on the surface,
+  /// numbered next.
   std::size_t surface_vertices = 0;
   /// The boundary triangles, outward: the input's, indexing nodes[0, surface_vertices), except
   /// where points were added on the surface and after refine_tets, which may split them.
@@ -33,8 +35,15 @@ struct TetOptions {
   /// A mesh with a dihedral angle below this (degrees) is made again with points added on the
   /// surface, and kept if its worst angle is better.
   double flat_dihedral_deg = 0.01;
-  /// Called with such a flat mesh before it is made again (larger: the surface is refined to
-  /// the quality bounds); may throw to stop there, e.g. when that mesh is already over budget.
+  /// Long thin input triangles (CAD parts) leave many -Y tetrahedra poorly shaped, not only a few
+  /// flat ones. A mesh whose mean radius-edge ratio is over this is made again with points added
+  /// on the surface, and kept if its mean ratio is lower. Off by default: a thin plate's or
+  /// shell's one layer is poorly shaped too, yet refines to the tolerance with far fewer
+  /// tetrahedra than mending it makes (a 2 mm disc: under 10,000 against 72,612), so the
+  /// refinement loop weighs the two (kPoorMeanRadiusEdge).
+  double poor_mean_radius_edge = INFINITY;
+  /// Called with such a mesh before it is made again (larger: the surface is refined to the
+  /// quality bounds); may throw to stop there, e.g. when that mesh is already over budget.
   std::function<void(const TetMesh&)> before_remesh;
 };
 
@@ -42,8 +51,13 @@ struct TetQuality {
   double max_radius_edge = 0;  ///< worst circumradius / shortest edge (regular tet: 0.612)
   double mean_radius_edge = 0;
   double min_dihedral_deg = 0;  ///< smallest dihedral angle of any tet (regular: 70.5)
+  double max_dihedral_deg = 0;  ///< largest (a flat tetrahedron: near 180)
   double volume = 0;            ///< total, m^3
 };
+
+/// A quality mesh averages a radius-edge ratio of 1.05-1.35 (the bundled meshes from good
+/// surfaces); over this mean a mesh is poorly shaped.
+inline constexpr double kPoorMeanRadiusEdge = 1.5;
 
 /// The most tetrahedra this tool makes (meshing and refinement refuse beyond it).
 inline constexpr std::size_t kMaxTetrahedra = 20'000'000;
