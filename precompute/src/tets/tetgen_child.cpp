@@ -29,6 +29,7 @@ void append(std::vector<char>& out, const void* p, std::size_t n) {
 
 void read_into(const std::vector<char>& in, std::size_t& at, void* p, std::size_t n) {
   if (in.size() - at < n) throw InternalError("TetGen's child process sent a short mesh");
+  if (n == 0) return;  // an empty vector's data() may be null, which memcpy may not take
   std::memcpy(p, in.data() + at, n);
   at += n;
 }
