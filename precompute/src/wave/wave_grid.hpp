@@ -15,10 +15,14 @@
 
 namespace chladni::precompute::wave {
 
+/// A direction turned: rows d.
+inline Vec3 turn_vector(const std::array<Vec3, 3>& rows, const Vec3& d) {
+  return {dot(rows[0], d), dot(rows[1], d), dot(rows[2], d)};
+}
+
 /// x turned about `pivot`: pivot + rows (x - pivot).
 inline Vec3 turn_point(const std::array<Vec3, 3>& rows, const Vec3& pivot, const Vec3& x) {
-  const Vec3 d = sub(x, pivot);
-  return {pivot[0] + dot(rows[0], d), pivot[1] + dot(rows[1], d), pivot[2] + dot(rows[2], d)};
+  return add(pivot, turn_vector(rows, sub(x, pivot)));
 }
 
 struct Grid {

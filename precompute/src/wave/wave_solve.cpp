@@ -144,8 +144,8 @@ Built build(const RadiatingSurface& surface, const Soundbank& bank, const Chord&
   }
   P.blocked = wave::block_faces(mesh, g);
   for (auto& d : P.blocked.direction) {  // into the object's frame, once for every mode
-    const Vec3 x{d[0], d[1], d[2]};
-    d = {float(dot(P.turn[0], x)), float(dot(P.turn[1], x)), float(dot(P.turn[2], x))};
+    const Vec3 n = wave::turn_vector(P.turn, {d[0], d[1], d[2]});
+    d = {float(n[0]), float(n[1]), float(n[2])};
   }
   for (std::size_t j : chord.modes)
     out.omega.push_back(grid_omega(bank.damped_omega(which[j]), c, g.h, dt));
