@@ -110,8 +110,13 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
   for (double w : bank.omega) freqs.push_back(w / (2 * std::numbers::pi));
   j["frequencies_hz"] = freqs;
   nlohmann::json stages = nlohmann::json::object();
-  for (const auto& s : r.stages) stages[s.name] = s.seconds;
+  nlohmann::json peaks = nlohmann::json::object();
+  for (const auto& s : r.stages) {
+    stages[s.name] = s.seconds;
+    if (s.peak_bytes > 0) peaks[s.name] = s.peak_bytes / 1048576.0;  // MiB, as peak_rss_mb
+  }
   j["seconds"] = stages;
+  j["peak_memory_mb"] = peaks;
   if (bank.transfer) {
     const auto& t = r.transfer_times;
     j["transfer"] = {
@@ -125,7 +130,8 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
   j["total_seconds"] = r.total_seconds;
   rusage ru{};
   getrusage(RUSAGE_SELF, &ru);
-  j["peak_rss_mb"] = double(ru.ru_maxrss) / 1024.0;  // Linux reports KiB
+  // Linux reports KiB; the stages' resets of the high-water mark lower ru_maxrss to the last one's.
+  j["peak_rss_mb"] = std::max(double(ru.ru_maxrss) / 1024.0, r.peak_bytes / 1048576.0);
   return j;
 }
 
@@ -249,7 +255,14 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
   }
   std::printf("time:");
   for (const auto& s : r.stages) std::printf(" %s %.2f s,", s.name.c_str(), s.seconds);
-  std::printf(" total %.2f s\nwrote %s\n", r.total_seconds, a.output.c_str());
+  std::printf(" total %.2f s\n", r.total_seconds);
+  if (r.peak_bytes > 0) {
+    std::printf("peak memory:");
+    for (const auto& s : r.stages)
+      if (s.peak_bytes > 0) std::printf(" %s %.2f GB,", s.name.c_str(), s.peak_bytes / 1e9);
+    std::printf(" largest %.2f GB\n", r.peak_bytes / 1e9);
+  }
+  std::printf("wrote %s\n", a.output.c_str());
 }
 
 void run_precompute(const PrecomputeArgs& a) {

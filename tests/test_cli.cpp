@@ -122,6 +122,14 @@ TEST(CliPrecompute, BarToBankToInfoToRender) {
   for (const char* stage :
        {"read mesh", "check surface", "tetrahedralize", "assemble", "eigen-solve"})
     EXPECT_TRUE(j["seconds"].contains(stage)) << stage;
+  // Each stage's peak resident memory, none above the process's.
+  for (const auto& [stage, mb] : j["peak_memory_mb"].items()) {
+    EXPECT_TRUE(j["seconds"].contains(stage)) << stage;
+    EXPECT_GT(mb.get<double>(), 1.0) << stage;
+    EXPECT_LE(mb.get<double>(), j["peak_rss_mb"].get<double>() + 1e-9) << stage;
+  }
+  EXPECT_TRUE(j["peak_memory_mb"].contains("eigen-solve")) << j["peak_memory_mb"].dump();
+  EXPECT_NE(r.output.find("peak memory: read mesh "), std::string::npos) << r.output;
   EXPECT_NEAR(j["frequencies_hz"][0].get<double>(), 575.0, 6.0);
   // The symbolic analysis reports the factor before it is computed.
   EXPECT_GT(j["eigen"]["factor_nonzeros"].get<double>(), double(j["volume_mesh"]["dofs"]));

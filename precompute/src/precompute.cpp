@@ -12,6 +12,7 @@
 #include "chladni/core/version.hpp"
 #include "chladni/precompute/mode_error.hpp"
 #include "fem/surface_sample.hpp"
+#include "peak_memory.hpp"
 #include "solve_to_tolerance.hpp"
 #include "surface/simplify_surface.hpp"
 #include "surface/surface_pieces.hpp"
@@ -262,10 +263,13 @@ Soundbank precompute_mesh(const std::string& mesh_path, const PrecomputeOptions&
                           PrecomputeReport& r, const Progress& p) {
   const auto t0 = std::chrono::steady_clock::now();
   if (p.stage) p.stage("read mesh");
+  reset_peak_memory();
   SurfaceMesh surface = read_mesh(mesh_path, o.scale);
   const auto read_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double read_peak = peak_memory_bytes();
   Soundbank bank = precompute_surface(std::move(surface), mesh_path, o, r, p);
-  r.stages.insert(r.stages.begin(), StageTime{"read mesh", read_s});
+  r.stages.insert(r.stages.begin(), StageTime{"read mesh", read_s, read_peak});
+  r.peak_bytes = std::max(r.peak_bytes, read_peak);
   r.total_seconds += read_s;
   return bank;
 }
@@ -327,6 +331,7 @@ Soundbank precompute_surface(SurfaceMesh surface, const std::string& origin,
     add_transfer(bank, surface, eo.max_memory, origin, o, r, p);
   }
   sw.stop();
+  for (const StageTime& s : r.stages) r.peak_bytes = std::max(r.peak_bytes, s.peak_bytes);
   r.total_seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t_begin).count();
   bank.metadata_json = metadata(bank, origin, o, r);

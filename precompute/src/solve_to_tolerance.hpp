@@ -6,6 +6,7 @@
 
 #include "chladni/precompute/mode_error.hpp"
 #include "chladni/precompute/precompute.hpp"
+#include "peak_memory.hpp"
 
 namespace chladni::precompute {
 
@@ -17,6 +18,7 @@ class Stopwatch {
     stop();
     name_ = name;
     t0_ = std::chrono::steady_clock::now();
+    reset_peak_memory();
     if (p_.stage) p_.stage(name);
   }
   void stop() {
@@ -24,10 +26,13 @@ class Stopwatch {
     const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count();
     auto it = std::find_if(r_.stages.begin(), r_.stages.end(),
                            [&](const StageTime& s) { return s.name == name_; });
-    if (it == r_.stages.end())
-      r_.stages.push_back({name_, dt});
-    else
+    const double peak = peak_memory_bytes();
+    if (it == r_.stages.end()) {
+      r_.stages.push_back({name_, dt, peak});
+    } else {
       it->seconds += dt;  // a stage repeated on a refined mesh
+      it->peak_bytes = std::max(it->peak_bytes, peak);
+    }
     name_.clear();
   }
 

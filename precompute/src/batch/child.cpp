@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -123,6 +124,8 @@ Result child_result(const Asset& a, const Child& c, int status, double peak_mb) 
       std::ifstream in(c.json);
       const nlohmann::json j = nlohmann::json::parse(in);
       r.modes = j.at("modes").at("kept").get<std::size_t>();
+      // The child resets its high-water mark per stage, which lowers what wait4 reports.
+      r.peak_mb = std::max(r.peak_mb, j.value("peak_rss_mb", 0.0));
     } catch (const std::exception& e) {
       r.status = Status::Failed;
       r.error = "precompute succeeded but its summary " + c.json + " is unreadable: " + e.what();

@@ -4,6 +4,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -12,6 +13,7 @@
 #include <cstring>
 #include <type_traits>
 
+#include "../peak_memory.hpp"
 #include "chladni/core/error.hpp"
 
 namespace chladni::precompute::bem_detail {
@@ -144,8 +146,10 @@ void SideProcess::finish(TransferTimes* times) {
   if (reader_.joinable()) reader_.join();
   int status = 0;
   pid_t got;
-  do got = ::waitpid(pid_, &status, 0);
+  rusage usage{};
+  do got = ::wait4(pid_, &status, 0, &usage);
   while (got < 0 && errno == EINTR);
+  if (got > 0) note_child_peak(usage);
   pid_ = -1;
   ::close(fd_);
   fd_ = -1;

@@ -17,6 +17,7 @@
 #include <fstream>
 #include <new>
 
+#include "../peak_memory.hpp"
 #include "chladni/core/error.hpp"
 
 namespace chladni::precompute {
@@ -131,8 +132,10 @@ std::optional<TetMesh> tetgen_isolated(const std::function<TetMesh()>& job, std:
   }
   close(fd[0]);
   int wstatus = 0;
-  while (waitpid(pid, &wstatus, 0) < 0 && errno == EINTR) {
+  rusage usage{};
+  while (wait4(pid, &wstatus, 0, &usage) < 0 && errno == EINTR) {
   }
+  note_child_peak(usage);
   if (WIFSIGNALED(wstatus) || !WIFEXITED(wstatus) || WEXITSTATUS(wstatus) != 0 || bytes.empty()) {
     const int sig = WIFSIGNALED(wstatus) ? WTERMSIG(wstatus) : 0;
     crash = sig == SIGXCPU ? "it ran past its " + std::to_string(int(std::ceil(cpu_seconds))) +

@@ -61,6 +61,10 @@ struct PrecomputeOptions {
 struct StageTime {
   std::string name;
   double seconds = 0;
+  /// The largest resident memory (bytes) of the process, or of a child it waited for (TetGen's,
+  /// the second BEM solver's), while the stage ran; over a stage repeated on refined meshes, the
+  /// largest. 0 where the kernel cannot say (docs/PERFORMANCE.md, "Memory per stage").
+  double peak_bytes = 0;
 };
 
 struct PrecomputeReport {
@@ -98,6 +102,7 @@ struct PrecomputeReport {
   double max_held_out = 0;
   std::vector<StageTime> stages;
   double total_seconds = 0;
+  double peak_bytes = 0;  ///< the largest of the stages' peaks (0: unknown)
 };
 
 /// Hooks for a progress display: a stage starts (name), a fraction of it is done, a note.
