@@ -186,7 +186,7 @@ void prefer_surface_points(const SurfaceMesh& surface, const FemPass& first, dou
                            TetMesh& tets, double& meshed) {
   if (!(first.quality.mean_radius_edge > kPoorMeanRadiusEdge)) return;
   TetOptions o = topt;
-  o.poor_mean_radius_edge = kPoorMeanRadiusEdge;
+  o.keep_surface = false;
   TetMesh remeshed;
   try {
     remeshed = tetrahedralize(surface, o);

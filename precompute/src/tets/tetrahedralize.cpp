@@ -210,32 +210,33 @@ TetMesh run_tetgen_refine(const TetMesh& m, const std::vector<double>& bound, co
 }
 
 // Without -Y TetGen's quality refinement can loop on some fine surfaces (a scanned figure ran
-// 6 minutes without end), so the optional second mesh runs under a CPU limit; past it the -Y
-// mesh stands.
-constexpr double kRemeshCpuSeconds = 60;
+// 6 minutes without end), so it runs under a CPU limit.
+constexpr double kSurfacePointsCpuSeconds = 60;
 
-// The -Y mesh `m`, or where it is flat or poorly shaped, the mesh with points added on the
-// surface if that is better by the same measure.
-TetMesh remesh_if_poor(const SurfaceMesh& s, const TetOptions& tries, const TetOptions& o,
+// The mesh with points added on the surface: nullopt where TetGen failed or ran past its limit
+// (the reason in `crash`).
+std::optional<TetMesh> with_surface_points(const SurfaceMesh& s, const TetOptions& o,
+                                           std::string& crash) {
+  return tetgen_isolated([&] { return run_tetgen(s, o, false); }, crash, 0,
+                         kSurfacePointsCpuSeconds);
+}
+
+// The -Y mesh `m`, or where it is flat, the mesh with points added on the surface if its worst
+// angle is better.
+TetMesh remesh_if_flat(const SurfaceMesh& s, const TetOptions& tries, const TetOptions& o,
                        TetMesh m) {
   const TetQuality q = tet_quality(m);
-  const bool flat = q.min_dihedral_deg < o.flat_dihedral_deg;
-  const bool poor = q.mean_radius_edge > o.poor_mean_radius_edge;
-  if (!flat && !poor) return m;
+  if (!(q.min_dihedral_deg < o.flat_dihedral_deg)) return m;
   if (o.before_remesh) o.before_remesh(m);
   std::string ignored;
   std::optional<TetMesh> steiner;
   try {
-    steiner =
-        tetgen_isolated([&] { return run_tetgen(s, tries, false); }, ignored, 0, kRemeshCpuSeconds);
+    steiner = with_surface_points(s, tries, ignored);
   } catch (const InputError&) {
     // the -Y mesh stands
   }
-  if (!steiner) return m;
-  const TetQuality sq = tet_quality(*steiner);
-  const bool better =
-      flat ? sq.min_dihedral_deg > q.min_dihedral_deg : sq.mean_radius_edge < q.mean_radius_edge;
-  return better ? std::move(*steiner) : m;
+  if (!steiner || !(tet_quality(*steiner).min_dihedral_deg > q.min_dihedral_deg)) return m;
+  return std::move(*steiner);
 }
 
 }  // namespace
@@ -286,10 +287,15 @@ TetMesh tetrahedralize(const SurfaceMesh& input, const TetOptions& o) {
   // TetGen 1.5 fails internal assertions (abort) on some surfaces at some volume bounds; in a
   // child process that is an error to report, and a slightly smaller bound usually avoids it.
   TetOptions tries = o;
+  if (!o.keep_surface) {  // no retries: a minute past its CPU limit would only repeat
+    std::string crash;
+    if (auto m = with_surface_points(s, o, crash)) return std::move(*m);
+    throw InputError("TetGen failed to mesh with points on the surface (" + crash + ")");
+  }
   for (int attempt = 0;; ++attempt) {
     std::string crash;
     if (auto m = tetgen_isolated([&] { return run_tetgen(s, tries, true); }, crash))
-      return remesh_if_poor(s, tries, o, std::move(*m));
+      return remesh_if_flat(s, tries, o, std::move(*m));
     if (attempt == 2 || tries.max_volume <= 0)
       throw InputError("TetGen failed on this surface (" + crash +
                        "); try another --max-tet-volume or --tolerance, or --repair");

@@ -17,9 +17,8 @@ struct TetMesh {
   std::vector<std::array<uint32_t, 4>> tets;  ///< positively oriented
   /// nodes[0, surface_vertices) are the input surface's vertices in their order: TetGen runs with
   /// -Y (no Steiner points on the surface; without it TetGen 1.5 can abort on poor surfaces).
-  /// Where -Y leaves tetrahedra flat or poorly shaped (TetOptions::flat_dihedral_deg,
-  /// poor_mean_radius_edge), tetrahedralize meshes again with points added on the surface,
-  /// numbered next.
+  /// Where -Y leaves tetrahedra flat (TetOptions::flat_dihedral_deg), or without
+  /// TetOptions::keep_surface, points added on the surface are numbered next.
   std::size_t surface_vertices = 0;
   /// The boundary triangles, outward: the input's, indexing nodes[0, surface_vertices), except
   /// where points were added on the surface and after refine_tets, which may split them.
@@ -35,14 +34,15 @@ struct TetOptions {
   /// A mesh with a dihedral angle below this (degrees) is made again with points added on the
   /// surface, and kept if its worst angle is better.
   double flat_dihedral_deg = 0.01;
-  /// Long thin input triangles (CAD parts) leave many -Y tetrahedra poorly shaped, not only a few
-  /// flat ones. A mesh whose mean radius-edge ratio is over this is made again with points added
-  /// on the surface, and kept if its mean ratio is lower. Off by default: a thin plate's or
-  /// shell's one layer is poorly shaped too, yet refines to the tolerance with far fewer
-  /// tetrahedra than mending it makes (a 2 mm disc: under 10,000 against 72,612), so the
+  /// true: TetGen's -Y, the input triangles are the mesh's boundary. false: TetGen may add
+  /// points on the surface where that is the only way to well-shaped tetrahedra (a CAD part's
+  /// long thin triangles: the rotor's mean radius-edge ratio 6.5 under -Y, 1.3 without), within
+  /// a minute of CPU time (without -Y TetGen can loop on fine surfaces). Not the default: a thin
+  /// plate's or shell's one layer is poorly shaped too, yet refines to the tolerance with far
+  /// fewer tetrahedra than mending it makes (a 2 mm disc: under 10,000 against 72,612), so the
   /// refinement loop weighs the two (kPoorMeanRadiusEdge).
-  double poor_mean_radius_edge = INFINITY;
-  /// Called with such a mesh before it is made again (larger: the surface is refined to the
+  bool keep_surface = true;
+  /// Called with a flat mesh before it is made again (larger: the surface is refined to the
   /// quality bounds); may throw to stop there, e.g. when that mesh is already over budget.
   std::function<void(const TetMesh&)> before_remesh;
 };
