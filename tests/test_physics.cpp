@@ -1,4 +1,4 @@
-// Analytic bar modes against the Euler-Bernoulli values of shared/meshes/README.md, mass
+// Analytic bar modes against the Euler-Bernoulli values of meshes/README.md, mass
 // normalization, and the half-sine contact spectrum.
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // Analytic modes of a free-free rectangular bar: Euler-Bernoulli bending across the thickness
 // (z) and across the width (y), and axial modes along x. Scenes play them without a precompute
 // ("bar" objects), and they are a validation reference for the FEM pipeline
-// (shared/meshes/README.md lists the values for bar.obj). Needs only core, so a runtime-only
+// (meshes/README.md lists the values for bar.obj). Needs only core, so a runtime-only
 // build plays bars.
 #include "chladni/core/modal_model.hpp"
 #include "chladni/core/scene.hpp"

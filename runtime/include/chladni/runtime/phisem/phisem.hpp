@@ -1,7 +1,7 @@
 #pragma once
 // PhISEM, Physically Informed Stochastic Event Modeling (P. Cook, "Physically Informed Sonic
-// Modeling (PhISM): Synthesis of Percussive Sounds", Computer Music Journal 21:3, 1997; the
-// per-sample algorithm in ../shared/references/004_*). Per sample:
+// Modeling (PhISM): Synthesis of Percussive Sounds", Computer Music Journal 21:3, 1997, and
+// his per-sample code for it). Per sample:
 //   energy *= system_decay                    (the shaken system loses energy)
 //   if (u < N / 1024)  level += energy         (a collision, likelier with more particles)
 //   x = level * noise;  level *= sound_decay    (each collision: a fast-decaying noise burst)
