@@ -125,6 +125,14 @@ inline SurfaceMesh with_piece(SurfaceMesh outer, const SurfaceMesh& inner, bool 
   return outer;
 }
 
+/// The volume a closed, outward-wound surface encloses (divergence theorem).
+inline double enclosed_volume(const SurfaceMesh& m) {
+  double v = 0;
+  for (const auto& t : m.triangles)
+    v += dot(m.vertices[t[0]], cross(m.vertices[t[1]], m.vertices[t[2]])) / 6;
+  return v;
+}
+
 /// A hollow ball: icospheres of radius r and r - wall, the inner one wound into the cavity.
 inline SurfaceMesh hollow_sphere(double r, double wall, int level) {
   return with_piece(icosphere(r, level), icosphere(r - wall, level), true);

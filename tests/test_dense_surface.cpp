@@ -17,17 +17,6 @@
 using namespace chladni;
 using namespace chladni::precompute;
 
-namespace {
-
-double volume_of(const SurfaceMesh& m) {
-  double v = 0;
-  for (const auto& t : m.triangles)
-    v += dot(m.vertices[t[0]], cross(m.vertices[t[1]], m.vertices[t[2]])) / 6;
-  return v;
-}
-
-}  // namespace
-
 // Collapses on a curved surface: fewer triangles, still a valid solid, every vertex, edge
 // midpoint and centroid within the envelope of the input (the input's own chords lie within
 // 3e-5 m of the sphere at this density).
@@ -65,7 +54,7 @@ TEST(DenseSurface, BoxSimplifiedKeepsItsShapeAndModes) {
   EXPECT_LE(simplified.triangles.size(), 2000u);
   SurfaceMesh kept;
   kept.vertices = simplified.vertices, kept.triangles = simplified.triangles;
-  EXPECT_NEAR(volume_of(kept), size[0] * size[1] * size[2], 1e-12);
+  EXPECT_NEAR(test::enclosed_volume(kept), size[0] * size[1] * size[2], 1e-12);
 
   PrecomputeReport rc;
   const Soundbank coarse = precompute_surface(test::box_surface(size, {4, 2, 2}), "box", o, rc);

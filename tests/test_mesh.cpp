@@ -17,7 +17,7 @@ using namespace chladni::precompute;
 
 namespace {
 
-const std::string kMeshes = CHLADNI_SHARED_MESHES;
+using chladni::test::kMeshes;
 
 // Unit cube, outward counter-clockwise triangles.
 const double kCubeV[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},

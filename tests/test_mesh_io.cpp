@@ -19,10 +19,10 @@ using namespace chladni::precompute;
 namespace {
 
 // Unit cube, outward counter-clockwise triangles.
-const float kCubeV[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
-                            {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
-const int kCubeF[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
-                           {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
+const float kFloatCubeV[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0},
+                                 {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+const int kFloatCubeF[12][3] = {{0, 2, 1}, {0, 3, 2}, {4, 5, 6}, {4, 6, 7}, {0, 1, 5}, {0, 5, 4},
+                                {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7}};
 
 std::string xyz(const float* v) {
   return std::to_string(v[0]) + " " + std::to_string(v[1]) + " " + std::to_string(v[2]);
@@ -49,11 +49,11 @@ std::string ply_binary(bool big) {
                   "property double y\nproperty double z\nproperty uchar red\n"
                   "element face 12\nproperty list uchar uint vertex_indices\n"
                   "property list uchar float texcoord\nend_header\n";
-  for (auto& v : kCubeV) {
+  for (auto& v : kFloatCubeV) {
     for (int k = 0; k < 3; ++k) put<double>(s, v[k], big);
     put<uint8_t>(s, 200);
   }
-  for (auto& f : kCubeF) {
+  for (auto& f : kFloatCubeF) {
     put<uint8_t>(s, 3);
     for (int k = 0; k < 3; ++k) put<uint32_t>(s, uint32_t(f[k]), big);
     put<uint8_t>(s, 2);
@@ -66,10 +66,10 @@ std::string stl_binary(uint32_t claimed) {
   std::string s = "solid but actually binary";
   s.resize(80, ' ');
   put<uint32_t>(s, claimed);
-  for (auto& f : kCubeF) {
+  for (auto& f : kFloatCubeF) {
     for (int k = 0; k < 3; ++k) put<float>(s, 0.f);
     for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) put<float>(s, kCubeV[f[c]][k]);
+      for (int k = 0; k < 3; ++k) put<float>(s, kFloatCubeV[f[c]][k]);
     put<uint16_t>(s, 0);
   }
   return s;
@@ -82,12 +82,12 @@ std::map<std::string, std::string> cube_files() {
                   "y\nproperty float z\nelement face 12\nproperty list uchar int "
                   "vertex_indices\nend_header\n",
               stl = "solid cube\n";
-  for (auto& v : kCubeV) {
+  for (auto& v : kFloatCubeV) {
     obj += "v " + xyz(v) + "\r\nvn 0 0 1\n";
     off += xyz(v) + " 255 0 0 255  # a coloured vertex\n";
     ply += xyz(v) + "\n";
   }
-  for (auto& f : kCubeF) {
+  for (auto& f : kFloatCubeF) {
     // Negative (relative) indices and v//n corners in OBJ.
     obj += "f " + std::to_string(f[0] - 8) + "//1 " + std::to_string(f[1] + 1) + "/1/1 " +
            std::to_string(f[2] + 1) + "\n";
@@ -96,7 +96,7 @@ std::map<std::string, std::string> cube_files() {
     ply += "3 " + std::to_string(f[0]) + " " + std::to_string(f[1]) + " " + std::to_string(f[2]) +
            "\n";
     stl += "facet normal 0 0 0\n outer loop\n";
-    for (int k = 0; k < 3; ++k) stl += "  vertex " + xyz(kCubeV[f[k]]) + "\n";
+    for (int k = 0; k < 3; ++k) stl += "  vertex " + xyz(kFloatCubeV[f[k]]) + "\n";
     stl += " endloop\nendfacet\n";
   }
   stl += "endsolid cube\n";

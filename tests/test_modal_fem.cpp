@@ -18,13 +18,14 @@
 #include "chladni/precompute/tet_mesh.hpp"
 #include "elastic_reference.hpp"
 #include "fem_fixtures.hpp"
+#include "test_support.hpp"
 
 using namespace chladni;
 using namespace chladni::precompute;
 
 namespace {
 
-const std::string kMeshes = CHLADNI_SHARED_MESHES;
+using chladni::test::kMeshes;
 
 double hz(double omega) {
   return omega / (2 * std::numbers::pi);

@@ -17,13 +17,14 @@
 #include "chladni/precompute/precompute.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
 #include "fem_fixtures.hpp"
+#include "test_support.hpp"
 
 using namespace chladni;
 using namespace chladni::precompute;
 
 namespace {
 
-const std::string kMeshes = CHLADNI_SHARED_MESHES;
+using chladni::test::kMeshes;
 
 FemMesh box_mesh(int cells, int order) {
   const Vec3 size{0.2, 0.1, 0.1};

@@ -12,10 +12,16 @@
 #include <iterator>
 #include <memory>
 #include <span>
+#include <string>
 
 #include "chladni/gpu/context.hpp"
 
 namespace chladni::test {
+
+#ifdef CHLADNI_SHARED_MESHES
+/// The bundled meshes' folder.
+inline const std::string kMeshes = CHLADNI_SHARED_MESHES;
+#endif
 
 inline std::shared_ptr<gpu::Context> gpu_context() {
   static std::shared_ptr<gpu::Context> ctx = []() -> std::shared_ptr<gpu::Context> {

@@ -19,7 +19,7 @@ using namespace chladni::precompute;
 
 namespace {
 
-const std::string kMeshes = CHLADNI_SHARED_MESHES;
+using chladni::test::kMeshes;
 
 }  // namespace
 

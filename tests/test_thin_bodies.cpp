@@ -25,13 +25,6 @@ namespace {
 
 constexpr double kR = 0.1, kWall = 0.003;
 
-double volume_of(const SurfaceMesh& m) {
-  double v = 0;
-  for (const auto& t : m.triangles)
-    v += dot(m.vertices[t[0]], cross(m.vertices[t[1]], m.vertices[t[2]])) / 6;
-  return v;
-}
-
 std::string problems_of(const SurfaceMesh& m) {
   std::string s;
   for (const std::string& p : check_mesh(m).problems()) s += p + "\n";
@@ -54,7 +47,9 @@ TEST(HollowBody, CheckAcceptsACavityWoundIntoItself) {
   EXPECT_EQ(r.outer_pieces, 1u);
   EXPECT_EQ(r.cavities, 1u);
   EXPECT_NEAR(r.volume,
-              volume_of(test::icosphere(kR, 2)) - volume_of(test::icosphere(kR - kWall, 2)), 1e-12);
+              test::enclosed_volume(test::icosphere(kR, 2)) -
+                  test::enclosed_volume(test::icosphere(kR - kWall, 2)),
+              1e-12);
 }
 
 TEST(HollowBody, MisplacedPiecesAreNamedAndRepaired) {
@@ -102,7 +97,7 @@ TEST(HollowBody, TetrahedraFillTheWallAndNotTheCavity) {
     v += tet_volume(t, e);
     for (uint32_t n : t.tets[e]) innermost = std::min(innermost, norm(t.nodes[n]));
   }
-  EXPECT_NEAR(v / volume_of(m), 1.0, 1e-9);
+  EXPECT_NEAR(v / test::enclosed_volume(m), 1.0, 1e-9);
   EXPECT_GT(innermost, (kR - kWall) * 0.98);  // no node inside the cavity
 }
 
@@ -142,9 +137,10 @@ TEST(HollowBody, ThinSphericalShellRingsAtLambsFrequency) {
   EXPECT_EQ(r.mesh.cavities, 1u);
 
   // The faceted spheres' radii, by their volumes.
-  const double ro = std::cbrt(3 * volume_of(test::icosphere(kR, 3)) / (4 * std::numbers::pi));
+  const double ro =
+      std::cbrt(3 * test::enclosed_volume(test::icosphere(kR, 3)) / (4 * std::numbers::pi));
   const double ri =
-      std::cbrt(3 * volume_of(test::icosphere(kR - kWall, 3)) / (4 * std::numbers::pi));
+      std::cbrt(3 * test::enclosed_volume(test::icosphere(kR - kWall, 3)) / (4 * std::numbers::pi));
   const double a = (ro + ri) / 2, L = 6;
   const Material steel = find_material("steel");
   const double nu = steel.poisson_ratio;

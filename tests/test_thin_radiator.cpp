@@ -76,7 +76,8 @@ double dipole_level(double ka, double cos_t, const AcousticOptions& o) {
   return o.air_density * w * k * d * std::abs(cos_t) / (4 * std::numbers::pi);
 }
 
-Transfer solve(const Soundbank& bank, const test::SurfaceMesh& mesh, const AcousticOptions& o) {
+Transfer solve_thin(const Soundbank& bank, const test::SurfaceMesh& mesh,
+                    const AcousticOptions& o) {
   const precompute::RadiatingSurface surface(mesh, o);
   auto kernels = precompute::make_cpu_transfer_kernels(1);
   return precompute::compute_transfer(surface, bank, o, *kernels);
@@ -103,7 +104,7 @@ TEST(ThinRadiator, LowFrequencyAutoMatchesLambsDipole) {
   AcousticOptions o;
   const std::vector<double> ka = {0.1, 0.2, 0.3};
   const test::SurfaceMesh m = spheroid(4);
-  const Transfer t = solve(translations(m, ka, o.sound_speed), m, o);
+  const Transfer t = solve_thin(translations(m, ka, o.sound_speed), m, o);
   for (std::size_t i = 0; i < ka.size(); ++i) {
     const double e =
         far_error(t, i, [&](const Vec3&, double cz) { return dipole_level(ka[i], cz, o); });
@@ -120,9 +121,9 @@ TEST(ThinRadiator, WaveMatchesBoundaryElementsAtKa2To10) {
   const test::SurfaceMesh m = spheroid(4);
   const Soundbank bank = translations(m, ka, o.sound_speed);
   o.method = AcousticOptions::Method::Bem;
-  const Transfer bem = solve(bank, m, o);
+  const Transfer bem = solve_thin(bank, m, o);
   o.method = AcousticOptions::Method::Wave;
-  const Transfer wave = solve(bank, m, o);
+  const Transfer wave = solve_thin(bank, m, o);
   for (std::size_t i = 0; i < ka.size(); ++i) {
     ASSERT_EQ(wave.modes[i].method, TransferMethod::Wave);
     const double e = far_error(
