@@ -9,6 +9,7 @@
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
 #include "chladni/core/soundbank.hpp"
+#include "chladni/report/bank_facts.hpp"
 #include "commands.hpp"
 #include "info_plot.hpp"
 
@@ -19,84 +20,6 @@ struct InfoArgs {
   std::string bank, plot;
   bool json = false;
 };
-
-struct ModeRow {
-  double f, d, zeta, t60, res;
-};
-
-ModeRow mode_row(const Soundbank& b, std::size_t i) {
-  const double w = b.omega[i], d = b.decay[i];
-  const double wd = std::sqrt(w * w - d * d);
-  return {wd / (2 * std::numbers::pi), d, d / w, d > 0 ? std::log(1000.0) / d : INFINITY,
-          b.residual[i]};
-}
-
-// Per-mode frequency error estimates (precompute's a-posteriori estimate), if recorded.
-std::vector<double> frequency_errors(const nlohmann::json& meta, const Soundbank& b) {
-  std::vector<double> ferr;
-  if (meta.is_object() && meta.contains("frequency_error_estimate") &&
-      meta["frequency_error_estimate"].is_array() &&
-      meta["frequency_error_estimate"].size() == b.mode_count())
-    for (const auto& e : meta["frequency_error_estimate"])
-      ferr.push_back(e.is_number() ? e.get<double>() : NAN);
-  return ferr;
-}
-
-nlohmann::json transfer_json(const Transfer& t) {
-  return {{"centre", t.centre},
-          {"radius_m", t.radius},
-          {"sound_speed", t.sound_speed},
-          {"air_density", t.air_density},
-          {"coefficients", t.coefficients.size()},
-          {"poor_fit_threshold", Transfer::kPoorFit},
-          {"poor_fits", t.poor_fits()}};
-}
-
-nlohmann::json mode_json(const Soundbank& b, std::size_t i, const std::vector<double>& ferr) {
-  const ModeRow r = mode_row(b, i);
-  nlohmann::json m = {
-      {"frequency_hz", r.f},
-      {"decay_per_s", r.d},
-      {"damping_ratio", r.zeta},
-      {"t60_s", std::isfinite(r.t60) ? nlohmann::json(r.t60) : nlohmann::json(nullptr)},
-      {"residual", r.res}};
-  if (!ferr.empty())
-    m["frequency_error_estimate"] =
-        std::isfinite(ferr[i]) ? nlohmann::json(ferr[i]) : nlohmann::json(nullptr);
-  if (b.transfer) {
-    const ModeTransfer& t = b.transfer->modes[i];
-    m["transfer"] = {{"method", to_string(t.method)},
-                     {"iterations", t.iterations},
-                     {"order", t.order},
-                     {"sources", t.sources},
-                     {"fit_residual", t.fit_residual},
-                     {"held_out_error", t.held_out_error},
-                     {"expansion_error", t.expansion_error},
-                     {"poor_fit", b.transfer->poor(i)},
-                     {"used_at_runtime", b.transfer->usable(i)}};
-  }
-  return m;
-}
-
-nlohmann::json info_json(const std::string& path, const Soundbank& b, const nlohmann::json& meta) {
-  const std::vector<double> ferr = frequency_errors(meta, b);
-  nlohmann::json j;
-  j["file"] = path;
-  j["version"] =
-      std::to_string(Soundbank::kVersionMajor) + "." + std::to_string(Soundbank::kVersionMinor);
-  j["metadata"] = meta;
-  j["material"] = {{"name", b.material.name},
-                   {"E", b.material.youngs_modulus},
-                   {"nu", b.material.poisson_ratio},
-                   {"rho", b.material.density},
-                   {"damping", b.material.damping.to_string()},
-                   {"source", b.material.source}};
-  j["surface"] = {{"vertices", b.vertices.size()}, {"triangles", b.triangles.size()}};
-  j["transfer"] = b.transfer ? transfer_json(*b.transfer) : nlohmann::json(nullptr);
-  j["modes"] = nlohmann::json::array();
-  for (std::size_t i = 0; i < b.mode_count(); ++i) j["modes"].push_back(mode_json(b, i, ferr));
-  return j;
-}
 
 void print_transfer(const Transfer& t) {
   std::printf(
@@ -178,8 +101,9 @@ void print_mode_table(const Soundbank& b, const std::vector<double>& ferr) {
                 "held-out", "expansion");
   std::printf("\n");
   for (std::size_t i = 0; i < b.mode_count(); ++i) {
-    const ModeRow r = mode_row(b, i);
-    std::printf("%6zu %12.2f %12.4g %12.3g %10.3g %10.2g", i, r.f, r.d, r.zeta, r.t60, r.res);
+    const report::ModeFacts r = report::mode_facts(b, i);
+    std::printf("%6zu %12.2f %12.4g %12.3g %10.3g %10.2g", i, r.frequency_hz, r.decay_per_s,
+                r.damping_ratio, r.t60_s, r.residual);
     if (!ferr.empty()) std::printf(" %7.2f%%", 100 * ferr[i]);
     if (b.transfer) {
       const ModeTransfer& m = b.transfer->modes[i];
@@ -200,13 +124,12 @@ void run_info(const InfoArgs& a) {
     write_info_plot(a.plot, a.bank, b);
     if (!a.json) std::printf("wrote %s\n", a.plot.c_str());
   }
-  nlohmann::json meta = nlohmann::json::parse(b.metadata_json, nullptr, false);
-  if (meta.is_discarded()) meta = b.metadata_json;
   if (a.json) {
-    std::printf("%s\n", info_json(a.bank, b, meta).dump(2).c_str());
+    std::printf("%s\n", report::bank_json(a.bank, b).dump(2).c_str());
     return;
   }
-  const std::vector<double> ferr = frequency_errors(meta, b);
+  const nlohmann::json meta = report::bank_metadata(b);
+  const std::vector<double> ferr = report::frequency_errors(meta, b);
   print_summary(a.bank, b, meta, !ferr.empty());
   print_mode_table(b, ferr);
 }

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "chladni/core/damping.hpp"
 #include "chladni/plot/figure.hpp"
-#include "damping_curve.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -50,11 +50,11 @@ void write_estimate_plot(const EstimatePlot& p) {
     }
   fig.points(x, y, ylo, yhi, blue, "partials (1-sigma bars)");
   std::vector<double> cf, cz;
-  damping_curve(p.curve, lo, hi, 200, cf, cz);
+  damping_ratio_curve(p.curve, lo, hi, 200, cf, cz);
   fig.line(cf, cz, red, "through the partials: " + p.curve.to_string());
   if (p.material) {
     std::vector<double> mf, mz;
-    damping_curve(*p.material, lo, hi, 200, mf, mz);
+    damping_ratio_curve(*p.material, lo, hi, 200, mf, mz);
     fig.line(mf, mz, green, "the fitted material's: " + p.material->to_string(), 1.5);
   }
   fig.write_png(p.path);

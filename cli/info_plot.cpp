@@ -5,10 +5,9 @@
 #include <numbers>
 #include <vector>
 
+#include "chladni/core/damping.hpp"
 #include "chladni/plot/figure.hpp"
-#include "chladni/runtime/modal/object_modes.hpp"
-#include "chladni/runtime/scene/scene_objects.hpp"
-#include "damping_curve.hpp"
+#include "chladni/report/radiation.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -39,33 +38,6 @@ std::pair<double, double> log_bounds(const std::vector<double>& v, double pad) {
   return {a, b};
 }
 
-// Pressure at 1 m per unit modal acceleration, rms over 14 directions at max(1 m, 4 R): the
-// runtime's listener gain (transfer where usable, else the compact-source estimate) scaled back
-// by distance and omega_d^2.
-std::vector<double> radiation_at_1m(const ModalModel& model) {
-  // gains_at_listener sets each mode's gain once, from the model's own: a fresh copy each time.
-  const runtime::ObjectModes base = runtime::object_modes(model);
-  const Vec3 c = model.transfer ? model.transfer->centre : Vec3{0, 0, 0};
-  const double r = std::max(1.0, model.transfer ? 4 * model.transfer->radius : 1.0);
-  std::vector<double> sum(model.mode_count(), 0.0);
-  std::vector<Vec3> dirs{{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-  for (int k = 0; k < 8; ++k)
-    dirs.push_back(scale(Vec3{k & 1 ? 1.0 : -1.0, k & 2 ? 1.0 : -1.0, k & 4 ? 1.0 : -1.0},
-                         1 / std::sqrt(3.0)));
-  for (const Vec3& d : dirs) {
-    runtime::ObjectModes object = base;
-    runtime::gains_at_listener(model, object, add(c, scale(d, r)));
-    for (std::size_t i = 0; i < sum.size(); ++i)
-      sum[i] += double(object.modes[i].gain) * object.modes[i].gain;
-  }
-  std::vector<double> out(sum.size());
-  for (std::size_t i = 0; i < sum.size(); ++i) {
-    const double wd = model.damped_omega(i);
-    out[i] = wd > 0 ? std::sqrt(sum[i] / double(dirs.size())) * r / (wd * wd) : NAN;
-  }
-  return out;
-}
-
 }  // namespace
 
 void write_info_plot(const std::string& path, const std::string& bank_path, const Soundbank& b) {
@@ -85,10 +57,10 @@ void write_info_plot(const std::string& path, const std::string& bank_path, cons
             {"damping ratio d / omega", zlo, zhi, true}, "damping per mode");
   fig.points(f, zeta, {}, {}, blue, "modes");
   std::vector<double> cf, cz;
-  damping_curve(b.material.damping, flo, fhi, 300, cf, cz);
+  damping_ratio_curve(b.material.damping, flo, fhi, 300, cf, cz);
   fig.line(cf, cz, red, "material: " + b.material.damping.to_string());
 
-  const std::vector<double> rad = radiation_at_1m(model);
+  const std::vector<double> rad = report::radiation_at_1m(model);
   std::vector<double> db(n);
   double dlo = INFINITY, dhi = -INFINITY;
   for (std::size_t i = 0; i < n; ++i) {

@@ -46,6 +46,29 @@ json report_data(const fs::path& dir) {
   return json::parse(text.substr(head.size(), text.rfind(';') - head.size()));
 }
 
+// The page's mode table and `chladni info --json` describe a mode under the same names with the
+// same values: one set of facts, from one place.
+TEST(ReportCli, ModesCarryInfosNamesAndValues) {
+  const fs::path dir = temp_path("report_names");
+  fs::remove_all(dir);
+  auto r = run_cli("report " + bar_bank() + " -o " + dir.string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const json page = report_data(dir);
+  r = run_cli("info " + bar_bank() + " --json");
+  ASSERT_EQ(r.code, 0) << r.output;
+  const json info = json::parse(r.output);
+  ASSERT_EQ(page["modes"].size(), info["modes"].size());
+  EXPECT_EQ(page["material"], info["material"]);
+  for (std::size_t i = 0; i < page["modes"].size(); ++i) {
+    const json& m = page["modes"][i];
+    EXPECT_EQ(m["bank_index"].get<std::size_t>(), i);
+    for (const auto& [key, value] : info["modes"][i].items()) {
+      ASSERT_TRUE(m.contains(key)) << "mode " << i << " of the page has no " << key;
+      EXPECT_EQ(m[key], value) << "mode " << i << ": " << key;
+    }
+  }
+}
+
 TEST(ReportCli, WritesTheFolderAndRefusesBadInput) {
   const fs::path dir = temp_path("report_cli");
   fs::remove_all(dir);

@@ -2,6 +2,8 @@
 
 #include <charconv>
 #include <cmath>
+#include <exception>
+#include <numbers>
 #include <sstream>
 
 #include "chladni/core/error.hpp"
@@ -115,6 +117,19 @@ std::string DampingModel::to_string() const {
   os << kind_name(kind) << ':';
   for (std::size_t j = 0; j < alpha.size(); ++j) os << (j ? "," : "") << alpha[j];
   return os.str();
+}
+
+void damping_ratio_curve(const DampingModel& m, double lo, double hi, int steps,
+                         std::vector<double>& f, std::vector<double>& zeta) {
+  for (int k = 0; k <= steps; ++k) {
+    const double x = lo * std::pow(hi / lo, double(k) / steps), w = 2 * std::numbers::pi * x;
+    f.push_back(x);
+    try {
+      zeta.push_back(m.coefficient(w) / (2 * w));
+    } catch (const std::exception&) {
+      zeta.push_back(NAN);
+    }
+  }
 }
 
 }  // namespace chladni

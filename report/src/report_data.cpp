@@ -7,6 +7,8 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
+#include "chladni/report/bank_facts.hpp"
+#include "chladni/report/radiation.hpp"
 #include "chladni/report/report.hpp"
 #include "chladni/runtime/modal/object_modes.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
@@ -95,24 +97,22 @@ json surface_json(const ModalModel& model, const Soundbank& bank, const ReportOp
 // |p| on three great circles (planes xy, xz, yz) at a far-field distance, by the runtime's gain
 // rule (the multipoles where the transfer is usable), each mode scaled to its loudest direction.
 json directivity_json(const ModalModel& model, const Vec3& centre, double radius, int angles) {
-  // gains_at_listener sets each mode's gain once, from the model's own: a fresh copy each time.
-  const runtime::ObjectModes base = runtime::object_modes(model);
   const std::size_t n = model.mode_count();
   const double r = std::max(1.0, 20 * radius);
-  std::vector<float> values(n * 3 * angles);
+  std::vector<Vec3> dirs;
   for (int plane = 0; plane < 3; ++plane)
     for (int a = 0; a < angles; ++a) {
       const double t = kTwoPi * a / angles, c = std::cos(t), s = std::sin(t);
-      const Vec3 d = plane == 0 ? Vec3{c, s, 0} : plane == 1 ? Vec3{c, 0, s} : Vec3{0, c, s};
-      runtime::ObjectModes object = base;
-      runtime::gains_at_listener(model, object, add(centre, scale(d, r)));
-      for (std::size_t i = 0; i < n; ++i)
-        values[(i * 3 + plane) * angles + a] = std::abs(object.modes[i].gain);
+      dirs.push_back(plane == 0 ? Vec3{c, s, 0} : plane == 1 ? Vec3{c, 0, s} : Vec3{0, c, s});
     }
+  const std::vector<std::vector<double>> gains = gains_towards(model, centre, r, dirs);
+  std::vector<float> values(n * dirs.size());
+  for (std::size_t k = 0; k < dirs.size(); ++k)  // k = plane * angles + a
+    for (std::size_t i = 0; i < n; ++i) values[i * dirs.size() + k] = float(gains[k][i]);
   for (std::size_t i = 0; i < n; ++i) {
-    float* v = &values[i * 3 * angles];
-    const float top = *std::max_element(v, v + 3 * angles);
-    for (int k = 0; k < 3 * angles; ++k) v[k] = top > 0 ? v[k] / top : 0.f;
+    float* v = &values[i * dirs.size()];
+    const float top = *std::max_element(v, v + dirs.size());
+    for (std::size_t k = 0; k < dirs.size(); ++k) v[k] = top > 0 ? v[k] / top : 0.f;
   }
   return {{"angles", angles},
           {"distance_m", r},
@@ -141,24 +141,13 @@ std::vector<std::size_t> modes_to_show(const ModalModel& model, const Soundbank&
   return kept;
 }
 
-// Mode i of the kept model, which is mode `index` of the bank.
-json mode_json(const ModalModel& model, const Soundbank& bank, std::size_t index, std::size_t i,
-               double gain) {
-  const double w = model.omega[i], d = model.decay[i], wd = model.damped_omega(i);
-  json m = {{"bank_index", index},    {"frequency_hz", wd / kTwoPi},
-            {"omega_d", wd},          {"decay", d},
-            {"damping_ratio", d / w}, {"t60_s", d > 0 ? std::log(1000.0) / d : 0.0},
-            {"gain", gain},           {"residual", bank.residual[index]}};
-  if (bank.transfer) {
-    const ModeTransfer& t = bank.transfer->modes[index];
-    m["transfer"] = {{"method", to_string(t.method)},
-                     {"order", t.order},
-                     {"held_out_error", t.held_out_error},
-                     {"fit_residual", t.fit_residual},
-                     {"iterations", t.iterations},
-                     {"poor", bank.transfer->poor(index)},
-                     {"usable", bank.transfer->usable(index)}};
-  }
+// Mode i of the kept model, which is mode `index` of the bank: its facts under `chladni info`'s
+// names, with the bank's index and its gain at the listener.
+json kept_mode_json(const Soundbank& bank, std::size_t index, const std::vector<double>& errors,
+                    double gain) {
+  json m = mode_json(bank, index, errors);
+  m["bank_index"] = index;
+  m["gain"] = gain;
   return m;
 }
 
@@ -181,9 +170,10 @@ std::string report_json(const Soundbank& bank, const ReportOptions& o, ReportSum
 
   runtime::ObjectModes object = runtime::object_modes(model);
   runtime::gains_at_listener(model, object, listener);
+  const std::vector<double> errors = frequency_errors(bank_metadata(bank), bank);
   json modes = json::array();
   for (std::size_t i = 0; i < model.mode_count(); ++i)
-    modes.push_back(mode_json(model, bank, kept[i], i, object.modes[i].gain));
+    modes.push_back(kept_mode_json(bank, kept[i], errors, object.modes[i].gain));
   std::vector<float> shapes;
   shapes.reserve(model.shapes.size() * 3);
   for (const Vec3& s : model.shapes)
@@ -192,12 +182,7 @@ std::string report_json(const Soundbank& bank, const ReportOptions& o, ReportSum
   json j;
   j["format"] = 1;
   j["bank"] = o.bank_path;
-  j["material"] = {{"name", bank.material.name},
-                   {"E", bank.material.youngs_modulus},
-                   {"nu", bank.material.poisson_ratio},
-                   {"rho", bank.material.density},
-                   {"damping", bank.material.damping.to_string()},
-                   {"source", bank.material.source}};
+  j["material"] = material_json(bank.material);
   j["bank_modes"] = bank.mode_count();
   j["transfer"] = bank.transfer
                       ? json("multipoles, R " + std::to_string(bank.transfer->radius) + " m")

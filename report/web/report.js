@@ -41,11 +41,11 @@
     R.modes.forEach((m, i) => {
       const t = m.transfer;
       const flags = !t ? "no transfer: compact-source gain"
-                   : !t.usable ? "POOR FIT (unused: compact-source gain)"
-                   : t.poor ? "POOR FIT" : "";
+                   : !t.used_at_runtime ? "POOR FIT (unused: compact-source gain)"
+                   : t.poor_fit ? "POOR FIT" : "";
       const row = body.insertRow();
       row.innerHTML =
-        [i, fmt(m.frequency_hz, 6), fmt(m.decay, 3), fmt(m.damping_ratio, 3), fmt(m.t60_s, 3),
+        [i, fmt(m.frequency_hz, 6), fmt(m.decay_per_s, 3), fmt(m.damping_ratio, 3), fmt(m.t60_s, 3),
          fmt(m.gain, 3), t ? t.method : "-", t ? t.order : "-", t ? fmt(t.held_out_error, 2) : "-"]
           .map((v) => `<td>${v}</td>`).join("") + `<td class="flag">${flags}</td>`;
       row.addEventListener("click", () => selectMode(i));

@@ -56,11 +56,12 @@ const ChladniStrike = (() => {
   }
 
   // Samples of the strike at model point `point` along `direction` (unit), from t = 0 (contact
-  // start). `modes`: [{omega_d, decay, gain}], `shapes`: Float32Array [mode][point][3].
+  // start). `modes`: [{omega_d, decay_per_s, gain}], `shapes`: Float32Array [mode][point][3].
   function synthesize(modes, shapes, pointCount, point, direction, opts) {
     const fs = opts.sampleRate, tau = opts.contactTime, J = opts.impulse;
     let longest = 0.5;
-    for (const m of modes) if (m.decay > 0) longest = Math.max(longest, Math.log(1000) / m.decay);
+    for (const m of modes)
+      if (m.decay_per_s > 0) longest = Math.max(longest, Math.log(1000) / m.decay_per_s);
     const seconds = Math.min(opts.maxSeconds || 4, longest + tau);
     const n = Math.max(1, Math.round(seconds * fs));
     const out = new Float64Array(n);
@@ -72,16 +73,16 @@ const ChladniStrike = (() => {
       const vn = shapes[o] * direction[0] + shapes[o + 1] * direction[1] + shapes[o + 2] * direction[2];
       const amp = (m.gain * vn * J) / m.omega_d;
       if (amp === 0) continue;
-      const lambda = [-m.decay, m.omega_d];
+      const lambda = [-m.decay_per_s, m.omega_d];
       for (let k = 0; k < contactSamples; ++k) {  // during the contact: W grows with t
         const t = k / fs;
-        const z = mul(contactWeight(tau, m.omega_d, m.decay, t), cexp([lambda[0] * t, lambda[1] * t]));
+        const z = mul(contactWeight(tau, m.omega_d, m.decay_per_s, t), cexp([lambda[0] * t, lambda[1] * t]));
         out[k] += amp * z[1];
       }
       // After it: z advances by exp(lambda / fs) per sample (in double precision).
       const step = cexp([lambda[0] / fs, lambda[1] / fs]);
       const t0 = contactSamples / fs;
-      let z = mul(contactWeight(tau, m.omega_d, m.decay, tau), cexp([lambda[0] * t0, lambda[1] * t0]));
+      let z = mul(contactWeight(tau, m.omega_d, m.decay_per_s, tau), cexp([lambda[0] * t0, lambda[1] * t0]));
       for (let k = contactSamples; k < n; ++k) {
         out[k] += amp * z[1];
         z = mul(z, step);

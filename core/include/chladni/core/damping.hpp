@@ -24,4 +24,10 @@ struct DampingModel {
   std::string to_string() const;
 };
 
+/// The damping ratio zeta(f) = beta(omega^2) / (2 omega) at `steps` + 1 frequencies spaced
+/// logarithmically over [lo, hi] Hz, appended to `f` and `zeta`; NaN where the model gives no
+/// valid coefficient (a gap when drawn).
+void damping_ratio_curve(const DampingModel& model, double lo, double hi, int steps,
+                         std::vector<double>& f, std::vector<double>& zeta);
+
 }  // namespace chladni
