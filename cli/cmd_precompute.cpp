@@ -20,24 +20,16 @@
 namespace chladni::cli {
 namespace {
 
+// What the command line fills: the library's options directly where a flag is one of them, and
+// the text and unit choices that become options in precompute_options.
 struct PrecomputeArgs {
-  std::string mesh, output, save_surface, unit = "m", material = "steel", damping,
-                                          mass = "consistent", json_path;
-  double scale = 1, E = NAN, nu = NAN, rho = NAN, max_freq = 20000, sample_rate = 48000;
-  double max_tet_volume = 0, tolerance = 0.01;
-  int max_meshes = 4;
+  precompute::PrecomputeOptions o;
+  std::string mesh, output, unit = "m", material = "steel", damping, mass = "consistent", json_path;
+  double scale = 1, E = NAN, nu = NAN, rho = NAN;
   std::string refinement = "local";
   double max_memory_gb = -1;  // negative: 80 % of the memory available
-  int order = 2, threads = 0;
-  std::size_t max_modes = 0, max_hole_edges = 200, mode_cap = 2000, max_surface_triangles = 20000;
   std::string eigensolver = "block", transfer_backend = "auto", transfer_method = "auto";
-  bool repair = false, quiet = false, no_transfer = false;
-  double repair_alpha = 0, repair_offset = 0, repair_max_distance = 0.10,
-         repair_max_volume_change = 0.10;
-  std::string batch_stamp;
-  int transfer_order = 0;
-  std::size_t transfer_max_sources = 1024;
-  double sound_speed = 343.0, air_density = 1.204;
+  bool quiet = false, no_transfer = false;
 };
 
 // What --repair did, as recorded in the soundbank's META.
@@ -61,12 +53,12 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
       {"volume_m3", r.mesh.volume},           {"cavities", r.mesh.cavities},
       {"simplified_from", r.simplified_from}, {"simplify_envelope_m", r.simplify_envelope}};
   j["repairs"] = r.repair.log;
-  if (a.repair) j["repair"] = repair_meta(bank);
+  if (a.o.repair) j["repair"] = repair_meta(bank);
   j["volume_mesh"] = {{"tetrahedra", r.tets},
                       {"nodes", r.nodes},
                       {"dofs", r.dofs},
                       {"nonzeros", r.nonzeros},
-                      {"element_order", a.order},
+                      {"element_order", a.o.order},
                       {"max_tet_volume_m3", r.max_tet_volume},
                       {"max_radius_edge", r.quality.max_radius_edge},
                       {"mean_radius_edge", r.quality.mean_radius_edge},
@@ -103,7 +95,7 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
                       {"max_tet_volume", m.max_tet_volume},
                       {"expected_modes", m.expected_modes},
                       {"seconds", m.seconds}});
-  j["accuracy"] = {{"tolerance", a.tolerance},       {"max_meshes", a.max_meshes},
+  j["accuracy"] = {{"tolerance", a.o.tolerance},     {"max_meshes", a.o.max_passes},
                    {"refinement", a.refinement},     {"converged", r.converged},
                    {"reason", r.unconverged_reason}, {"meshes", passes}};
   nlohmann::json freqs = nlohmann::json::array();
@@ -137,15 +129,8 @@ nlohmann::json summary_json(const PrecomputeArgs& a, const precompute::Precomput
 
 // The pipeline's options from the command line's.
 precompute::PrecomputeOptions precompute_options(const PrecomputeArgs& a) {
-  precompute::PrecomputeOptions o;
+  precompute::PrecomputeOptions o = a.o;
   o.scale = precompute::unit_scale(a.unit) * a.scale;
-  o.repair = a.repair;
-  o.save_surface = a.save_surface;
-  o.repair_options.max_hole_edges = a.max_hole_edges;
-  o.repair_options.wrap_alpha = a.repair_alpha;
-  o.repair_options.wrap_offset = a.repair_offset;
-  o.repair_options.max_distance = a.repair_max_distance;
-  o.repair_options.max_volume_change = a.repair_max_volume_change;
   o.material = find_material(a.material);
   if (!std::isnan(a.E) || !std::isnan(a.nu) || !std::isnan(a.rho))
     o.material.name = a.material + " (modified)";
@@ -154,31 +139,15 @@ precompute::PrecomputeOptions precompute_options(const PrecomputeArgs& a) {
   if (!std::isnan(a.rho)) o.material.density = a.rho;
   if (!a.damping.empty()) o.material.damping = DampingModel::parse(a.damping);
   o.material.validate();
-  o.order = a.order;
   if (a.mass == "lumped")
     o.mass = precompute::MassKind::Lumped;
   else if (a.mass != "consistent")
     throw InputError("--mass must be consistent or lumped");
-  o.max_modes = a.max_modes;
-  o.batch_stamp = a.batch_stamp;
-  o.max_frequency = a.max_freq;
-  o.sample_rate = a.sample_rate;
-  o.max_tet_volume = a.max_tet_volume;
-  o.max_surface_triangles = a.max_surface_triangles;
-  o.tolerance = a.tolerance;
-  o.max_passes = a.max_meshes;
   o.local_refinement = a.refinement == "local";
   o.max_memory = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
-  o.threads = a.threads;
-  o.mode_cap = std::max(a.mode_cap, a.max_modes);
+  o.mode_cap = std::max(o.mode_cap, o.max_modes);
   o.transfer = !a.no_transfer;
-  o.acoustic.order = a.transfer_order;
-  o.acoustic.max_sources = a.transfer_max_sources;
-  o.acoustic.sound_speed = a.sound_speed;
-  o.acoustic.air_density = a.air_density;
-  o.acoustic.threads = a.threads;
-  o.acoustic.bem.threads = a.threads;
-  o.acoustic.wave.threads = a.threads;
+  o.acoustic.threads = o.acoustic.bem.threads = o.acoustic.wave.threads = o.threads;
   o.acoustic.method = parse_transfer_method(a.transfer_method, "--transfer-method");
   o.acoustic.validate();
   if (o.transfer) o.gpu = transfer_device(a.transfer_backend);
@@ -186,7 +155,6 @@ precompute::PrecomputeOptions precompute_options(const PrecomputeArgs& a) {
     o.eigensolver = precompute::EigenOptions::Method::Spectra;
   else if (a.eigensolver != "block")
     throw InputError("--eigensolver must be block or spectra");
-
   return o;
 }
 
@@ -202,7 +170,7 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
     std::printf(", hollow (%zu %s)", r.mesh.cavities, r.mesh.cavities == 1 ? "cavity" : "cavities");
   std::printf("\n");
   for (const auto& line : r.repair.log) std::printf("  repaired: %s\n", line.c_str());
-  if (a.repair && r.repair.changed())
+  if (a.o.repair && r.repair.changed())
     std::printf(
         "  repair (%s): the surface moved up to %.3g mm (%.2f %% of its %.3g m size); "
         "volume %.4g -> %.4g m^3 (%+.2f %%%s)\n",
@@ -216,11 +184,11 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
   std::printf(
       "tetrahedra %zu (P%d, %zu nodes, %zu DOFs, max volume %.3g m^3); quality: radius-edge max "
       "%.2f mean %.2f, dihedral angles %.1f-%.1f deg\n",
-      r.tets, a.order, r.nodes, r.dofs, r.max_tet_volume, r.quality.max_radius_edge,
+      r.tets, a.o.order, r.nodes, r.dofs, r.max_tet_volume, r.quality.max_radius_edge,
       r.quality.mean_radius_edge, r.quality.min_dihedral_deg, r.quality.max_dihedral_deg);
   std::string stopped = r.eigen.capped ? " (stopped at --mode-cap before --max-freq)" : "";
-  if (a.max_modes > 0 && r.computed - r.below_band < a.max_modes)
-    stopped = " (of the " + std::to_string(a.max_modes) + " asked for, those below --max-freq)";
+  if (a.o.max_modes > 0 && r.computed - r.below_band < a.o.max_modes)
+    stopped = " (of the " + std::to_string(a.o.max_modes) + " asked for, those below --max-freq)";
   std::printf("eigen-solve (%s): %zu rigid modes removed, %zu elastic modes, max residual %.2g%s\n",
               r.eigen.factorization.c_str(), r.eigen.rigid_removed, r.computed, r.max_residual,
               stopped.c_str());
@@ -230,12 +198,12 @@ void print_summary(const PrecomputeArgs& a, const precompute::PrecomputeReport& 
     std::printf(
         "accuracy: largest estimated frequency error %.2g %% (tolerance %.2g %%) after %zu "
         "mesh%s%s%s\n",
-        100 * worst_kept, 100 * a.tolerance, r.passes.size(), r.passes.size() == 1 ? "" : "es",
+        100 * worst_kept, 100 * a.o.tolerance, r.passes.size(), r.passes.size() == 1 ? "" : "es",
         r.converged ? "" : "; not converged: ", r.converged ? "" : r.unconverged_reason.c_str());
   }
   std::printf("modes kept %zu; dropped: %zu overdamped, %zu below 20 Hz, %zu above %.0f Hz\n",
               r.kept, r.overdamped, r.below_band, r.above_band,
-              std::min(a.max_freq, a.sample_rate / 2));
+              std::min(a.o.max_frequency, a.o.sample_rate / 2));
   if (!bank.omega.empty()) {
     std::printf("lowest:");
     for (std::size_t i = 0; i < std::min<std::size_t>(8, bank.omega.size()); ++i)
@@ -269,7 +237,7 @@ void run_precompute(const PrecomputeArgs& a) {
   // Every output is checked before the work (minutes, sometimes) that fills it.
   check_output_path(a.output, "soundbank");
   if (!a.json_path.empty()) check_output_path(a.json_path, "--json");
-  if (!a.save_surface.empty()) check_output_path(a.save_surface, "--save-surface");
+  if (!a.o.save_surface.empty()) check_output_path(a.o.save_surface, "--save-surface");
   const precompute::PrecomputeOptions o = precompute_options(a);
   ProgressBar bar(a.quiet);
   precompute::Progress p;
@@ -306,7 +274,7 @@ void add_input_options(CLI::App* cmd, PrecomputeArgs* a) {
       ->check(finite_in(1, 1e5));
   cmd->add_option("--damping", a->damping,
                   "rayleigh:A1,A2 | caughey:A1,...,AN | power:A1,A2 | hybrid:R1,R2,P1,P2");
-  cmd->add_option("--order", a->order, "Element order: 1 (linear) or 2 (quadratic)")
+  cmd->add_option("--order", a->o.order, "Element order: 1 (linear) or 2 (quadratic)")
       ->check(CLI::Range(1, 2))
       ->capture_default_str();
   cmd->add_option("--mass", a->mass, "Mass matrix: consistent or lumped")->capture_default_str();
@@ -314,26 +282,26 @@ void add_input_options(CLI::App* cmd, PrecomputeArgs* a) {
 
 // The repair ladder (docs/repair.md) and its limits.
 void add_repair_options(CLI::App* cmd, PrecomputeArgs* a) {
-  cmd->add_flag("--repair", a->repair,
+  cmd->add_flag("--repair", a->o.repair,
                 "Repair a mesh that is not a valid solid: local fixes, self-intersection removal, "
                 "else an alpha wrap; reports how far the surface moved (docs/repair.md)");
-  cmd->add_option("--max-hole-edges", a->max_hole_edges,
+  cmd->add_option("--max-hole-edges", a->o.repair_options.max_hole_edges,
                   "--repair fills holes up to this many edges")
       ->check(CLI::Range(3, 1000000))
       ->capture_default_str();
-  cmd->add_option("--repair-alpha", a->repair_alpha,
+  cmd->add_option("--repair-alpha", a->o.repair_options.wrap_alpha,
                   "The wrap's ball radius (m, after --unit/--scale): gaps and holes narrower "
                   "close (0: the thinnest wall)")
       ->check(finite_in(0, 1e6));
-  cmd->add_option("--repair-offset", a->repair_offset,
+  cmd->add_option("--repair-offset", a->o.repair_options.wrap_offset,
                   "How far outside the input the wrap lies (m; 0: a hundredth of the thinnest "
                   "wall)")
       ->check(finite_in(0, 1e6));
-  cmd->add_option("--repair-max-distance", a->repair_max_distance,
+  cmd->add_option("--repair-max-distance", a->o.repair_options.max_distance,
                   "Refuse a wrap that moves the surface further than this fraction of its size")
       ->check(finite_in(1e-6, 1))
       ->capture_default_str();
-  cmd->add_option("--repair-max-volume-change", a->repair_max_volume_change,
+  cmd->add_option("--repair-max-volume-change", a->o.repair_options.max_volume_change,
                   "Refuse a wrap that changes the volume by more than this fraction")
       ->check(finite_in(1e-6, 10))
       ->capture_default_str();
@@ -341,31 +309,31 @@ void add_repair_options(CLI::App* cmd, PrecomputeArgs* a) {
 
 // What to compute, how accurately, within what memory; checking and repairing the surface.
 void add_solver_options(CLI::App* cmd, PrecomputeArgs* a) {
-  cmd->add_option("--max-modes", a->max_modes,
+  cmd->add_option("--max-modes", a->o.max_modes,
                   "Compute the first N elastic modes from 20 Hz to --max-freq (0: all below it)")
       ->check(CLI::Range(0, 100000));
-  cmd->add_option("--max-freq", a->max_freq, "Highest frequency of interest (Hz)")
+  cmd->add_option("--max-freq", a->o.max_frequency, "Highest frequency of interest (Hz)")
       ->check(finite_above(0, 1e6))
       ->capture_default_str();
-  cmd->add_option("--sample-rate", a->sample_rate, "Drop modes above its Nyquist frequency (Hz)")
+  cmd->add_option("--sample-rate", a->o.sample_rate, "Drop modes above its Nyquist frequency (Hz)")
       ->check(finite_in(8000, 384000))
       ->capture_default_str();
-  cmd->add_option("--max-tet-volume", a->max_tet_volume,
+  cmd->add_option("--max-tet-volume", a->o.max_tet_volume,
                   "Largest tetrahedron (m^3; 0: chosen by the solver, refining until the modes "
                   "asked for are within --tolerance)")
       ->check(finite_in(0, 1e6));
-  cmd->add_option("--max-surface-triangles", a->max_surface_triangles,
+  cmd->add_option("--max-surface-triangles", a->o.max_surface_triangles,
                   "A surface of more triangles is simplified toward half as many before "
                   "meshing, within an envelope that moves no frequency by more than a fifth of "
                   "--tolerance (0: never; not with --max-tet-volume)")
       ->check(CLI::Range(std::size_t(0), std::size_t(100000000)))
       ->capture_default_str();
-  cmd->add_option("--tolerance", a->tolerance,
+  cmd->add_option("--tolerance", a->o.tolerance,
                   "Target relative frequency error of every mode asked for, by the error "
                   "estimate; the mesh is refined where it asks (at most --max-meshes meshes)")
       ->check(finite_in(1e-4, 0.5))
       ->capture_default_str();
-  cmd->add_option("--max-meshes", a->max_meshes,
+  cmd->add_option("--max-meshes", a->o.max_passes,
                   "Meshes solved at most while refining toward --tolerance (1: the first mesh "
                   "only, with its error estimate)")
       ->check(CLI::Range(1, 8))
@@ -381,16 +349,16 @@ void add_solver_options(CLI::App* cmd, PrecomputeArgs* a) {
                   "80 % of the memory available): larger problems are refused before the "
                   "factorization, with what they would need")
       ->check(finite_in(0, 1e6));
-  cmd->add_option("--mode-cap", a->mode_cap, "Most modes searched for below --max-freq")
+  cmd->add_option("--mode-cap", a->o.mode_cap, "Most modes searched for below --max-freq")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
   cmd->add_option("--eigensolver", a->eigensolver,
                   "block (block Lanczos, default) or spectra (Spectra's Lanczos), same operator")
       ->capture_default_str();
   add_repair_options(cmd, a);
-  cmd->add_option("--save-surface", a->save_surface,
+  cmd->add_option("--save-surface", a->o.save_surface,
                   "Write the checked (repaired, simplified) surface, the one meshed, as OBJ");
-  cmd->add_option("--threads", a->threads, "Assembly threads (0: all cores)")
+  cmd->add_option("--threads", a->o.threads, "Assembly threads (0: all cores)")
       ->check(thread_count())
       ->capture_default_str();
 }
@@ -407,11 +375,11 @@ void add_precompute(CLI::App& app, bool run) {
   cmd->add_flag("-q,--quiet", a->quiet, "No progress and no summary");
   cmd->add_flag("--no-transfer", a->no_transfer,
                 "Skip acoustic transfer (listener gains then use a compact-source estimate)");
-  cmd->add_option("--transfer-order", a->transfer_order,
+  cmd->add_option("--transfer-order", a->o.acoustic.order,
                   "Multipole order L for every mode (0: per mode from k and the object's size)")
       ->check(CLI::Range(0, 40))
       ->capture_default_str();
-  cmd->add_option("--transfer-max-sources", a->transfer_max_sources,
+  cmd->add_option("--transfer-max-sources", a->o.acoustic.max_sources,
                   "Most equivalent sources per mode")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
@@ -425,14 +393,14 @@ void add_precompute(CLI::App& app, bool run) {
   cmd->add_option("--transfer-backend", a->transfer_backend,
                   "Transfer kernels: auto (a real GPU if present, else CPU), cpu or gpu")
       ->capture_default_str();
-  cmd->add_option("--sound-speed", a->sound_speed, "Speed of sound in air (m/s)")
+  cmd->add_option("--sound-speed", a->o.acoustic.sound_speed, "Speed of sound in air (m/s)")
       ->check(finite_in(10, 1e4))
       ->capture_default_str();
-  cmd->add_option("--air-density", a->air_density, "Density of air (kg/m^3)")
+  cmd->add_option("--air-density", a->o.acoustic.air_density, "Density of air (kg/m^3)")
       ->check(finite_in(1e-3, 1e4))
       ->capture_default_str();
   // Set by `chladni batch` only: recorded so a rerun knows this soundbank is current.
-  cmd->add_option("--batch-stamp", a->batch_stamp)->group("")->check([](const std::string& s) {
+  cmd->add_option("--batch-stamp", a->o.batch_stamp)->group("")->check([](const std::string& s) {
     return s.size() == 32 && s.find_first_not_of("0123456789abcdef") == std::string::npos
                ? std::string()
                : std::string("expected 32 hex digits");
