@@ -30,7 +30,7 @@ FemPass fem_pass(TetMesh tets, const PrecomputeOptions& o, const EigenOptions& e
   sw.start("eigen-solve");
   f.eigen = solve_modes(km.K, km.M, rigid_body_modes(fem.nodes), e, p.note);
   sw.start("error estimate");
-  f.errors = estimate_mode_errors(fem, o.material, f.eigen, o.threads);
+  f.errors = estimate_mode_errors(fem, o.material, f.eigen.lambda, f.eigen.vectors, o.threads);
   return f;
 }
 

@@ -5,7 +5,7 @@
 #include <string>
 
 #include "chladni/precompute/mode_error.hpp"
-#include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute/precompute_options.hpp"
 #include "peak_memory.hpp"
 
 namespace chladni::precompute {

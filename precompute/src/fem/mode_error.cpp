@@ -266,10 +266,11 @@ double element_error(const FemMesh& mesh, std::size_t e, const ElementGeometry& 
 }  // namespace
 
 ModeErrors estimate_mode_errors(const FemMesh& mesh, const Material& material,
-                                const EigenResult& modes, int threads) {
+                                const std::vector<double>& omega2, const Eigen::MatrixXd& shapes,
+                                int threads) {
   const std::size_t ne = mesh.element_count(), nn = mesh.nodes.size();
-  const std::size_t nm = modes.lambda.size();
-  if (modes.vectors.rows() != Eigen::Index(mesh.dofs()) || modes.vectors.cols() != Eigen::Index(nm))
+  const std::size_t nm = omega2.size();
+  if (shapes.rows() != Eigen::Index(mesh.dofs()) || shapes.cols() != Eigen::Index(nm))
     throw InternalError("estimate_mode_errors: the modes do not belong to this mesh");
   const int npe = mesh.nodes_per_element();
   std::vector<ElementGeometry> geo(ne);
@@ -296,10 +297,10 @@ ModeErrors estimate_mode_errors(const FemMesh& mesh, const Material& material,
       std::vector<std::array<Strain, 4>> corner(ne);
       std::vector<Coefficients> coef(nn);
       for (std::size_t m = t; m < nm; m += nt) {
-        const double* u = modes.vectors.col(Eigen::Index(m)).data();
+        const double* u = shapes.col(Eigen::Index(m)).data();
         recovery.recover(u, geo, corner, coef, recovered);
         // Relative to 2 lambda_h = 2 u^T K u: the frequency's error, not the eigenvalue's.
-        const double scale = modes.lambda[m] > 0 ? 0.5 / modes.lambda[m] : 0.0;
+        const double scale = omega2[m] > 0 ? 0.5 / omega2[m] : 0.0;
         double total = 0;
         for (std::size_t e = 0; e < ne; ++e) {
           const double eta =

@@ -6,10 +6,10 @@
 // whose first term dominates, so (f_h - f) / f ~ eta^2 / (2 lambda_h) with
 //   eta^2 = sum over elements of the integral of (eps* - eps_h) : C : (eps* - eps_h).
 // The element terms also say where the mesh is too coarse for a mode (thin walls, torsion).
+#include <Eigen/Core>
 #include <vector>
 
 #include "chladni/core/material.hpp"
-#include "chladni/precompute/eigensolve.hpp"
 #include "chladni/precompute/fem.hpp"
 
 namespace chladni::precompute {
@@ -24,8 +24,10 @@ struct ModeErrors {
   std::vector<double> element;
 };
 
-/// `modes` must be `mesh`'s M-normalized eigenvectors (solve_modes' result). threads: 0 = all.
+/// `shapes` must be `mesh`'s M-normalized eigenvectors, one column per mode, with `omega2` their
+/// eigenvalues (solve_modes' EigenResult::vectors and ::lambda). threads: 0 = all.
 ModeErrors estimate_mode_errors(const FemMesh& mesh, const Material& material,
-                                const EigenResult& modes, int threads = 0);
+                                const std::vector<double>& omega2, const Eigen::MatrixXd& shapes,
+                                int threads = 0);
 
 }  // namespace chladni::precompute
