@@ -2,17 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <vector>
 
 #include "chladni/core/damping.hpp"
 #include "chladni/plot/figure.hpp"
+#include "chladni/report/bank_facts.hpp"
 #include "chladni/report/radiation.hpp"
 
 namespace chladni::cli {
 namespace {
-
-constexpr double kTwoPi = 2 * std::numbers::pi;
 
 // Log-axis bounds around the positive values of v, widened by `pad` and rounded out to 1, 2 or
 // 5 x 10^k.
@@ -45,8 +43,9 @@ void write_info_plot(const std::string& path, const std::string& bank_path, cons
   const std::size_t n = model.mode_count();
   std::vector<double> f(n), zeta(n);
   for (std::size_t i = 0; i < n; ++i) {
-    f[i] = model.damped_omega(i) / kTwoPi;
-    zeta[i] = model.decay[i] / model.omega[i];
+    const report::ModeFacts facts = report::mode_facts(b, i);
+    f[i] = facts.frequency_hz;
+    zeta[i] = facts.damping_ratio;
   }
   plot::Figure fig(1200, 980, bank_path + ": " + std::to_string(n) + " modes, " + b.material.name);
   const auto [flo, fhi] = log_bounds(f, 1.2);

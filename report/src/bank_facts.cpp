@@ -8,7 +8,7 @@ namespace chladni::report {
 using nlohmann::json;
 
 ModeFacts mode_facts(const Soundbank& b, std::size_t i) {
-  const double w = b.omega[i], d = b.decay[i], wd = std::sqrt(std::max(w * w - d * d, 0.0));
+  const double w = b.omega[i], d = b.decay[i], wd = b.damped_omega(i);
   return {wd / (2 * std::numbers::pi),
           wd,
           d,
