@@ -24,8 +24,7 @@
 #include "bench_support.hpp"
 #include "chladni/core/random.hpp"
 #include "chladni/gpu/context.hpp"
-#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
-#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/make_filterbank.hpp"
 #include "chladni/runtime/phisem/shaker_bank.hpp"
 #include "chladni/runtime/scene/render.hpp"
 
@@ -108,13 +107,6 @@ Result run(const std::string& load, const std::string& backend, Filterbank& fb,
   return r;
 }
 
-CpuIsa cpu_isa(const std::string& isa) {
-  return isa == "scalar"   ? CpuIsa::Scalar
-         : isa == "avx2"   ? CpuIsa::Avx2
-         : isa == "avx512" ? CpuIsa::Avx512
-                           : CpuIsa::Auto;
-}
-
 struct Args {
   double seconds = 3;
   int threads = 0;
@@ -139,7 +131,7 @@ Args parse_args(int argc, char** argv) {
       throw std::invalid_argument(std::string("unknown option ") + argv[i]);
   }
   if (!(a.seconds > 0)) throw std::invalid_argument("--seconds must be > 0");
-  const CpuIsa isa = cpu_isa(a.isa);
+  const CpuIsa isa = parse_cpu_isa(a.isa);
   if (!CpuFilterbank::supports(isa))
     throw std::invalid_argument("this processor cannot run --isa " + a.isa);
   return a;
@@ -148,21 +140,16 @@ Args parse_args(int argc, char** argv) {
 // A filterbank for `voices` on `backend`; null where there is no Vulkan device.
 std::unique_ptr<Filterbank> make_filterbank(const std::string& backend, const Args& a,
                                             const std::vector<ShakerVoice>& voices) {
-  uint32_t slots = 0;
-  for (const auto& v : voices) slots += static_cast<uint32_t>(v.resonances.size());
-  if (backend != "gpu")
-    return std::make_unique<CpuFilterbank>(CpuFilterbankOptions{.capacity = slots,
-                                                                .channels = 1,
-                                                                .threads = a.threads,
-                                                                .isa = cpu_isa(a.isa),
-                                                                .max_frames = kBlock});
+  FilterbankRequest r;
+  r.backend = backend == "gpu" ? gpu::DeviceChoice::Gpu : gpu::DeviceChoice::Cpu;
+  r.gpu_falls_back = false;
+  for (const auto& v : voices) r.capacity += static_cast<uint32_t>(v.resonances.size());
+  r.threads = a.threads;
+  r.isa = parse_cpu_isa(a.isa);
+  r.max_frames = kBlock;
+  r.max_streams = static_cast<uint32_t>(voices.size());
   try {
-    auto ctx = std::make_shared<gpu::Context>();
-    return std::make_unique<GpuFilterbank>(
-        ctx, GpuFilterbankOptions{.capacity = slots,
-                                  .channels = 1,
-                                  .max_frames = kBlock,
-                                  .max_streams = static_cast<uint32_t>(voices.size())});
+    return chladni::runtime::make_filterbank(r);
   } catch (const gpu::NoDeviceError& e) {
     std::fprintf(stderr, "gpu: %s; skipped\n", e.what());
     return nullptr;

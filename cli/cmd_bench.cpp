@@ -11,10 +11,10 @@
 #include <sstream>
 #include <thread>
 
-#include "backend.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
 #include "commands.hpp"
+#include "parse_choices.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -71,13 +71,12 @@ std::vector<double> time_calls(runtime::Filterbank& fb, uint32_t frames, double 
 }
 
 Record measure(const BenchArgs& a, const std::string& backend, uint32_t n) {
-  BackendRequest req;
-  req.backend = backend;
+  runtime::FilterbankRequest req;
   req.capacity = n;
   req.channels = 1;
   req.threads = a.threads;
   req.max_frames = a.block * std::max(1u, a.batch);
-  auto fb = make_filterbank(req);
+  auto fb = make_filterbank(backend, "auto", req);
   // Modes spread over the audible band with decays of 0.5-20 1/s, all ringing.
   std::mt19937 rng(1234);
   std::uniform_real_distribution<double> logf(std::log(40.0), std::log(18000.0)), dec(0.5, 20.0);

@@ -11,7 +11,6 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 
-#include "backend.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
 #include "chladni/core/paper_animation.hpp"
@@ -22,6 +21,7 @@
 #include "chladni/tools/paper_scenarios.hpp"
 #include "commands.hpp"
 #include "paper_db_cache.hpp"
+#include "parse_choices.hpp"
 #include "progress.hpp"
 #include "spectrogram.hpp"
 
@@ -78,12 +78,11 @@ void run_synthesis(const AnalyzeArgs& a, PaperAnimation& anim) {
   if (o.mode != runtime::PaperSynthMode::Modal) db = database(a.db);
   std::unique_ptr<runtime::Filterbank> fb;
   if (o.mode != runtime::PaperSynthMode::Database) {
-    BackendRequest r;
-    r.backend = a.backend;
+    runtime::FilterbankRequest r;
     r.channels = 2;
     r.capacity = 1u << 18;
     r.max_frames = 1024;
-    fb = make_filterbank(r);
+    fb = make_filterbank(a.backend, "auto", r);
   }
   runtime::PaperRenderReport rep;
   const AudioBuffer audio = runtime::render_paper(anim, db ? &*db : nullptr, fb.get(), o, &rep);

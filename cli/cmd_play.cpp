@@ -12,7 +12,7 @@
 #include "chladni/core/scene.hpp"
 #include "chladni/runtime/scene/scene_timeline.hpp"
 #include "commands.hpp"
-#include "scene_setup.hpp"
+#include "scene_args.hpp"
 
 namespace chladni::cli {
 namespace {
@@ -89,14 +89,15 @@ void play(const PlayArgs& a, const Scene& scene) {
                      " (is a sound server running? --api jack|alsa|pulse)");
   PlayArgs live = a;
   live.live = true;
-  const SceneSetup setup = setup_scene(scene, live);
-  runtime::SceneTimeline timeline(scene, setup.objects, *setup.fb, setup.options);
+  runtime::PreparedScene prepared = prepare(scene, live);
+  runtime::SceneTimeline timeline(scene, prepared);
   Playback p;
   p.timeline = &timeline;
   p.channels = scene.channels;
   p.stop_at =
       (a.duration > 0 ? runtime::first_sample(a.duration, scene.sample_rate) : timeline.end()) +
-      setup.fb->latency();  // a pipelined GPU hands the last samples back that much later
+      prepared.filterbank
+          ->latency();  // a pipelined GPU hands the last samples back that much later
   RtAudio::StreamParameters out;
   out.deviceId = a.device >= 0 ? static_cast<unsigned>(a.device) : audio.getDefaultOutputDevice();
   out.nChannels = static_cast<unsigned>(scene.channels);
@@ -116,7 +117,7 @@ void play(const PlayArgs& a, const Scene& scene) {
   if (audio.isStreamOpen()) audio.closeStream();
   if (p.failed) throw InternalError("play: the synthesis failed in the audio callback");
   if (!a.quiet) {
-    const uint32_t fb_latency = setup.fb->latency();
+    const uint32_t fb_latency = prepared.filterbank->latency();
     std::printf(
         "%s, device %u (%s): %u frames per buffer, %d Hz, stream latency %ld frames "
         "(%.1f ms), filterbank latency %u frames (%.1f ms)\n",

@@ -9,12 +9,12 @@
 #include <nlohmann/json.hpp>
 #include <numbers>
 
-#include "backend.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
 #include "chladni/precompute/blas_kernels.hpp"
 #include "chladni/precompute/precompute.hpp"
 #include "commands.hpp"
+#include "parse_choices.hpp"
 #include "progress.hpp"
 
 namespace chladni::cli {

@@ -11,7 +11,6 @@
 #include <numbers>
 #include <sstream>
 
-#include "backend.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/number_table.hpp"
 #include "chladni/core/output_file.hpp"
@@ -22,6 +21,7 @@
 #include "chladni/precompute/memory_budget.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "commands.hpp"
+#include "parse_choices.hpp"
 
 namespace chladni::cli {
 namespace {

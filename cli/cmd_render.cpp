@@ -4,17 +4,15 @@
 #include <memory>
 #include <numbers>
 
-#include "backend.hpp"
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/core/soundbank.hpp"
-#include "chladni/gpu/context.hpp"
-#include "chladni/runtime/scene/render.hpp"
-#include "chladni/runtime/scene/scene_objects.hpp"
+#include "chladni/runtime/scene/prepare_scene.hpp"
 #include "commands.hpp"
-#include "scene_setup.hpp"
+#include "parse_choices.hpp"
+#include "scene_args.hpp"
 #include "spectrogram.hpp"
 
 namespace chladni::cli {
@@ -31,10 +29,10 @@ void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
   if (!a.quiet)
     std::printf("scene %s: %zu objects, %zu impacts, %zu moves, %zu shakes\n", a.scene.c_str(),
                 scene.objects.size(), scene.events.size(), scene.moves.size(), scene.shakes.size());
-  const SceneSetup setup = setup_scene(scene, a);
-  const auto& fb = setup.fb;
+  runtime::PreparedScene prepared = prepare(scene, a);
+  const auto& fb = prepared.filterbank;
   runtime::RenderReport rep;
-  AudioBuffer audio = runtime::render_scene(scene, setup.objects, *fb, setup.options, &rep);
+  AudioBuffer audio = runtime::render_scene(scene, prepared, &rep);
 
   double gain = 1.0;
   if (!std::isnan(a.normalize_db) && rep.peak > 0)

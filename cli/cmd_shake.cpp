@@ -7,7 +7,6 @@
 #include <memory>
 #include <numbers>
 
-#include "backend.hpp"
 #include "chladni/core/audio_file.hpp"
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
@@ -17,6 +16,7 @@
 #include "chladni/runtime/scene/render.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
 #include "commands.hpp"
+#include "parse_choices.hpp"
 #include "spectrogram.hpp"
 
 namespace chladni::cli {
@@ -79,14 +79,13 @@ std::unique_ptr<runtime::Filterbank> make_shake_filterbank(
     const ShakeArgs& a, int channels, const std::vector<runtime::ShakerVoice>& voices) {
   std::size_t slots = 0;
   for (const auto& v : voices) slots += v.resonances.size();
-  BackendRequest req;
-  req.backend = a.backend;
+  runtime::FilterbankRequest req;
   req.channels = channels;
   req.threads = a.threads;
   req.capacity = static_cast<uint32_t>(std::max<std::size_t>(slots, 64));
   req.max_frames = std::max<uint32_t>(a.block, 256);
   req.max_streams = a.voices;
-  return make_filterbank(req);
+  return make_filterbank(a.backend, "auto", req);
 }
 
 // The peak before --normalize; a non-finite sample is a bug, not a loud sound.

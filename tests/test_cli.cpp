@@ -53,6 +53,14 @@ TEST(Cli, BadArgumentsExitWith2) {
                 chladni::test::temp_path("x.wav") + " --backend tpu")
                 .code,
             2);
+  for (const auto& [bad, message] :
+       {std::pair<std::string, std::string>{" --backend tpu", "--backend: unknown backend 'tpu'"},
+        {" --isa sse", "--isa: unknown instruction set 'sse'"}}) {
+    const Result r = run("render " CHLADNI_SOURCE_DIR "/examples/struck_bar.json -o " +
+                         chladni::test::temp_path("x.wav") + bad);
+    EXPECT_EQ(r.code, 2) << r.output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << r.output;
+  }
   EXPECT_EQ(run("render /nonexistent.json -o " + chladni::test::temp_path("x.wav")).code, 2);
   EXPECT_EQ(run("bench --modes 10,abc").code, 2);
   EXPECT_EQ(run("no-such-command").code, 2);

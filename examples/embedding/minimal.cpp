@@ -2,7 +2,7 @@
 // Built by the tests; run it with a soundbank path or without (an analytic steel bar).
 #include <chladni/core/analytic_bar.hpp>
 #include <chladni/core/soundbank.hpp>
-#include <chladni/runtime/filterbank/cpu_filterbank.hpp>
+#include <chladni/runtime/filterbank/make_filterbank.hpp>
 #include <chladni/runtime/scene/scene_objects.hpp>
 #include <chladni/runtime/scene/scene_player.hpp>
 #include <cmath>
@@ -18,8 +18,10 @@ int main(int argc, char** argv) try {
                          : analytic_bar(BarSpec{});
   if (argc == 1) keep_modes(model, apply_damping(model, BarSpec{}.damping, 20.0, 20000.0, fs).kept);
 
-  runtime::CpuFilterbank fb({.capacity = 1 << 16, .channels = 2});
-  runtime::ScenePlayer player(fb, {.sample_rate = fs, .synth = {.sample_rate = fs}});
+  // A hardware GPU where there is one, else the CPU filterbank.
+  const auto fb = runtime::make_filterbank(
+      {.backend = gpu::DeviceChoice::Auto, .capacity = 1 << 16, .channels = 2, .max_frames = 256});
+  runtime::ScenePlayer player(*fb, {.sample_rate = fs, .synth = {.sample_rate = fs}});
   const std::size_t k =
       player.add_object(runtime::object_modes(model), {0.3, 1.0, 0.0}, {1, 0, 0, 0});
   player.finish_objects();  // control thread: allocates
@@ -36,7 +38,7 @@ int main(int argc, char** argv) try {
     player.render(256, buffer.data());
     for (float x : buffer) peak = std::max(peak, double(std::abs(x)));
   }
-  std::printf("%s: 1 s rendered, peak %.3g Pa\n", fb.name().c_str(), peak);
+  std::printf("%s: 1 s rendered, peak %.3g Pa\n", fb->name().c_str(), peak);
   return peak > 0 ? 0 : 1;
 } catch (const std::exception& e) {
   std::fprintf(stderr, "error: %s\n", e.what());

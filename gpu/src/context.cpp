@@ -187,6 +187,24 @@ std::string DeviceInfo::type_name() const {
   }
 }
 
+bool is_hardware_gpu(const DeviceInfo& info) {
+  return info.type == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU ||
+         info.type == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU;
+}
+
+std::shared_ptr<Context> open_device(DeviceChoice choice,
+                                     const std::function<void(const std::string&)>& on_missing) {
+  if (choice == DeviceChoice::Cpu) return nullptr;
+  try {
+    auto ctx = std::make_shared<Context>();
+    if (choice == DeviceChoice::Auto && !is_hardware_gpu(ctx->info())) return nullptr;
+    return ctx;
+  } catch (const NoDeviceError& e) {
+    if (choice == DeviceChoice::Gpu && on_missing) on_missing(e.what());
+    return nullptr;
+  }
+}
+
 bool ContextOptions::default_validation() {
 #ifdef CHLADNI_VULKAN_VALIDATION_DEFAULT
   return true;

@@ -4,7 +4,7 @@
 #include <numbers>
 
 #include "chladni/core/soundbank.hpp"
-#include "chladni/runtime/scene/render.hpp"
+#include "chladni/runtime/scene/scene_shakers.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
 #include "handles.hpp"
 

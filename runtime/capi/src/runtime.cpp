@@ -2,8 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "chladni/runtime/filterbank/cpu_filterbank.hpp"
-#include "chladni/runtime/filterbank/gpu_filterbank.hpp"
+#include "chladni/runtime/filterbank/make_filterbank.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
 #include "handles.hpp"
 
@@ -16,34 +15,21 @@ namespace {
 
 thread_local std::string g_error;
 
+// GPU asked for explicitly fails without a device; AUTO takes a hardware GPU, else the CPU.
 std::unique_ptr<Filterbank> make_filterbank(const chladni_config& c) {
-  if (c.backend != CHLADNI_BACKEND_CPU) {
-    try {
-      auto ctx = std::make_shared<gpu::Context>();
-      const VkPhysicalDeviceType t = ctx->info().type;
-      // auto: a real GPU; a CPU driver such as lavapipe is slower than the CPU filterbank.
-      if (c.backend == CHLADNI_BACKEND_GPU || t == VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU ||
-          t == VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU) {
-        GpuFilterbankOptions o;
-        o.channels = c.channels;
-        o.max_frames = c.block_size;
-        o.gain_ramp = c.gain_ramp;
-        o.capacity = c.mode_budget + c.shaker_slots;
-        o.max_streams = c.shaker_slots ? c.max_shakers : 0;
-        o.pipelined = c.gpu_pipeline != 0;
-        return std::make_unique<GpuFilterbank>(ctx, o);
-      }
-    } catch (const gpu::NoDeviceError&) {
-      if (c.backend == CHLADNI_BACKEND_GPU) throw;
-    }
-  }
-  CpuFilterbankOptions o;
-  o.capacity = c.mode_budget + c.shaker_slots;
-  o.channels = c.channels;
-  o.threads = c.threads;
-  o.max_frames = c.block_size;
-  o.gain_ramp = c.gain_ramp;
-  return std::make_unique<CpuFilterbank>(o);
+  FilterbankRequest r;
+  r.backend = c.backend == CHLADNI_BACKEND_CPU   ? gpu::DeviceChoice::Cpu
+              : c.backend == CHLADNI_BACKEND_GPU ? gpu::DeviceChoice::Gpu
+                                                 : gpu::DeviceChoice::Auto;
+  r.gpu_falls_back = false;
+  r.capacity = c.mode_budget + c.shaker_slots;
+  r.channels = c.channels;
+  r.threads = c.threads;
+  r.max_frames = c.block_size;
+  r.max_streams = c.shaker_slots ? c.max_shakers : 0;
+  r.gain_ramp = c.gain_ramp;
+  r.pipelined = c.gpu_pipeline != 0;
+  return runtime::make_filterbank(r);
 }
 
 void check_config(const chladni_config& c) {

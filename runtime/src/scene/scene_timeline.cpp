@@ -65,9 +65,16 @@ PlayerOptions player_options(const Scene& scene, std::size_t objects, const Scen
 
 SceneTimeline::SceneTimeline(const Scene& scene, const std::vector<ObjectModes>& objects,
                              Filterbank& fb, const RenderOptions& options)
+    : SceneTimeline(scene, objects, scene_shakers(scene, objects, options.seed), fb, options) {}
+
+SceneTimeline::SceneTimeline(const Scene& scene, PreparedScene& p)
+    : SceneTimeline(scene, p.objects, p.shakers, *p.filterbank, p.options) {}
+
+SceneTimeline::SceneTimeline(const Scene& scene, const std::vector<ObjectModes>& objects,
+                             SceneShakers shakers, Filterbank& fb, const RenderOptions& options)
     : scene_(scene),
       fs_(scene.sample_rate),
-      shakers_(scene_shakers(scene, objects, options.seed)),
+      shakers_(std::move(shakers)),
       player_(fb, player_options(scene, objects.size(), shakers_, options)),
       objects_(objects),
       max_frames_(fb.max_frames()) {

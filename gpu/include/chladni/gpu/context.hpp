@@ -4,6 +4,8 @@
 
 #include <atomic>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -98,5 +100,20 @@ class Context {
   uint64_t timestamp_mask_ = 0;
   std::atomic<std::size_t> validation_errors_{0};
 };
+
+/// Where work that can run on either side should go.
+enum class DeviceChoice {
+  Cpu,   ///< no device
+  Gpu,   ///< the chosen Vulkan device, whatever its type
+  Auto,  ///< a discrete or integrated GPU; a CPU driver such as lavapipe is slower than the CPU
+};
+
+/// A discrete or integrated GPU, not a CPU driver or a virtual device.
+bool is_hardware_gpu(const DeviceInfo& info);
+
+/// The device for `choice`: null for Cpu, and for Auto without a hardware GPU. Gpu without a usable
+/// device calls `on_missing` with the reason (when given) and returns null.
+std::shared_ptr<Context> open_device(
+    DeviceChoice choice, const std::function<void(const std::string&)>& on_missing = {});
 
 }  // namespace chladni::gpu

@@ -13,31 +13,13 @@
 #include "chladni/runtime/filterbank/filterbank.hpp"
 #include "chladni/runtime/modal/object_modes.hpp"
 #include "chladni/runtime/modal/synth.hpp"
-#include "chladni/runtime/phisem/shaker_bank.hpp"
+#include "chladni/runtime/scene/scene_shakers.hpp"
 
 namespace chladni::gpu {
 class Context;
 }
 
 namespace chladni::runtime {
-
-/// The shaker voices a scene's shake events need: one per (object, instrument, resonance choice,
-/// particle count, impulse), voice v seeded with seed + v; `voice[e]` is scene.shakes[e]'s.
-/// Validates the instruments (InputError naming the event's JSON path).
-/// The voice of a shake: `object`'s modes driven by the instrument's particles (resonate_object;
-/// `seed` draws its contact points), or the instrument's own resonances. InputError, prefixed
-/// with the event's JSON path, for an unknown instrument or bad parameters.
-ShakerVoice shake_voice(const ShakeEvent& event, const ObjectModes& object, double sample_rate,
-                        uint64_t seed);
-
-struct SceneShakers {
-  std::vector<std::size_t> first_event;  ///< per voice: the event that defines it
-  std::vector<ShakerVoice> voices;       ///< per voice
-  std::vector<int> voice;                ///< per shake event
-  uint32_t slots = 0;                    ///< filterbank slots of all the voices
-};
-SceneShakers scene_shakers(const Scene& scene, const std::vector<ObjectModes>& objects,
-                           uint64_t seed = 1);
 
 struct RenderOptions {
   uint32_t block = 256;    ///< frames per filterbank call
@@ -65,8 +47,13 @@ struct RenderReport {
   std::string gain_backend;   ///< "cpu", "gpu" or "" without transfer
 };
 
-/// Renders the scene; `objects[i]` describes scene.objects[i]. The filterbank's channel count must
-/// match the scene's.
+/// Renders the scene; `objects[i]` describes scene.objects[i] and `shakers` its shake events'
+/// voices (scene_shakers; the overload without builds them). The filterbank's channel count must
+/// match the scene's, and its capacity hold the options' max_modes plus the shakers' slots.
+/// prepare_scene.hpp sizes and builds all of it once.
+AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& objects,
+                         const SceneShakers& shakers, Filterbank& filterbank,
+                         const RenderOptions& options, RenderReport* report = nullptr);
 AudioBuffer render_scene(const Scene& scene, const std::vector<ObjectModes>& objects,
                          Filterbank& filterbank, const RenderOptions& options,
                          RenderReport* report = nullptr);

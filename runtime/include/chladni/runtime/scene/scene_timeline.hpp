@@ -7,6 +7,7 @@
 
 #include "chladni/core/scene.hpp"
 #include "chladni/runtime/phisem/shaker_bank.hpp"
+#include "chladni/runtime/scene/prepare_scene.hpp"
 #include "chladni/runtime/scene/render.hpp"
 #include "chladni/runtime/scene/scene_player.hpp"
 
@@ -14,9 +15,15 @@ namespace chladni::runtime {
 
 class SceneTimeline {
  public:
-  /// `scene` and `objects` (objects[i] describes scene.objects[i]) must outlive the timeline.
+  /// `scene` and `objects` (objects[i] describes scene.objects[i]) must outlive the timeline;
+  /// `shakers` are the scene's shake voices (scene_shakers).
+  SceneTimeline(const Scene& scene, const std::vector<ObjectModes>& objects, SceneShakers shakers,
+                Filterbank& fb, const RenderOptions& options);
+  /// Builds the shakers itself.
   SceneTimeline(const Scene& scene, const std::vector<ObjectModes>& objects, Filterbank& fb,
                 const RenderOptions& options);
+  /// A prepared scene, which must outlive the timeline.
+  SceneTimeline(const Scene& scene, PreparedScene& prepared);
   ~SceneTimeline();
 
   /// Renders up to `frames` (at most the filterbank's max_frames()) interleaved frames, ending
