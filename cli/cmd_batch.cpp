@@ -24,6 +24,32 @@ struct BatchArgs {
   bool force = false, dry_run = false, quiet = false;
 };
 
+// The precompute command line of one asset: its mesh and output, then its options.
+std::vector<std::string> precompute_line(const std::string& mesh, const std::string& output,
+                                         const std::vector<std::string>& options) {
+  std::vector<std::string> args{"precompute", mesh, "-o", output};
+  args.insert(args.end(), options.begin(), options.end());
+  return args;
+}
+
+// Parses `args` (precompute_line) with a fresh parser, which runs the precompute if it was
+// added to run; a parse error becomes an InputError prefixed by `where`.
+void parse_precompute(CLI::App& app, const std::vector<std::string>& args,
+                      const std::string& where = "") {
+  std::vector<std::string> reversed{args.rbegin(), args.rend()};  // CLI11 pops from the back
+  try {
+    app.parse(reversed);
+  } catch (const CLI::ParseError& e) {
+    throw InputError(where + e.what());
+  }
+}
+
+// The batch sets these for every asset (docs/batch.md): a manifest may not.
+bool managed(const std::string& name) {
+  return name == "json" || name == "quiet" || name == "output" || name == "batch-stamp" ||
+         name == "save-surface" || name == "help";
+}
+
 // The precompute command's own parser decides what a manifest may say.
 batch::OptionSchema precompute_schema() {
   batch::OptionSchema s;
@@ -31,28 +57,46 @@ batch::OptionSchema precompute_schema() {
   add_precompute(*app, false);
   s.kind = [app](const std::string& name) {
     const CLI::Option* opt = app->get_subcommand("precompute")->get_option_no_throw("--" + name);
+    if (!opt) opt = app->get_subcommand("precompute")->get_option_no_throw("-" + name);
+    if (opt && !opt->get_lnames().empty() && managed(opt->get_lnames().front()))
+      return batch::OptionSchema::Managed;
     if (!opt || opt->get_group().empty()) return batch::OptionSchema::Unknown;
     return opt->get_items_expected_min() == 0 ? batch::OptionSchema::Flag
                                               : batch::OptionSchema::Value;
   };
-  s.check = [](const std::vector<std::string>& args) {
+  s.check = [](const std::string& mesh, const std::string& output,
+               const std::vector<std::string>& options) {
     CLI::App app;  // a fresh parser per asset: parsing fills it
     add_precompute(app, false);
     CLI::App* cmd = app.get_subcommand("precompute");
-    std::vector<std::string> reversed{args.rbegin(), args.rend()};
-    reversed.push_back("precompute");
-    try {
-      app.parse(reversed);
-    } catch (const CLI::ParseError& e) {
-      throw InputError(e.what());
-    }
+    parse_precompute(app, precompute_line(mesh, output, options));
     // What only the run would find otherwise: the material preset and the damping model.
     if (const CLI::Option* m = cmd->get_option_no_throw("--material"); m && m->count())
       (void)find_material(m->as<std::string>());
     if (const CLI::Option* d = cmd->get_option_no_throw("--damping"); d && d->count())
       (void)DampingModel::parse(d->as<std::string>());
+    return batch::OptionSchema::Own{cmd->get_option("--max-memory")->count() > 0,
+                                    cmd->get_option("--threads")->count() > 0};
   };
   return s;
+}
+
+// One asset's job, as the batch wrote it: its precompute line, with the batch's share of memory
+// and threads where the asset sets none, the summary and the stamp.
+void run_batch_job(const std::string& path) {
+  const batch::ChildJob job = batch::read_child_job(path);
+  std::vector<std::string> args = precompute_line(job.mesh, job.output, job.options);
+  if (job.memory_bytes >= 0) {
+    char gb[32];
+    std::snprintf(gb, sizeof gb, "%.9g", job.memory_bytes / 1e9);
+    args.insert(args.end(), {"--max-memory", gb});
+  }
+  if (job.threads > 0) args.insert(args.end(), {"--threads", std::to_string(job.threads)});
+  if (!job.summary.empty()) args.insert(args.end(), {"--json", job.summary});
+  if (!job.stamp.empty()) args.insert(args.end(), {"--batch-stamp", job.stamp});
+  CLI::App app;
+  add_precompute(app, true);
+  parse_precompute(app, args, path + ": ");  // what the run finds is its own error
 }
 
 std::string summary_path(const BatchArgs& a, const batch::Manifest& m) {
@@ -61,7 +105,7 @@ std::string summary_path(const BatchArgs& a, const batch::Manifest& m) {
 
 void run_batch_command(const BatchArgs& a) {
   batch::RunOptions o;
-  o.exe = fs::read_symlink("/proc/self/exe").string();
+  o.command = {fs::read_symlink("/proc/self/exe").string(), "batch-job"};
   o.jobs = a.jobs > 0 ? a.jobs : std::max(1, int(std::thread::hardware_concurrency()));
   o.threads = a.threads;
   o.memory_budget = a.max_memory_gb < 0 ? -1.0 : a.max_memory_gb * 1e9;
@@ -133,6 +177,12 @@ void add_batch(CLI::App& app) {
   cmd->add_option("--log-dir", a->log_dir, "Per-asset logs (default OUTPUT_DIR/batch-logs)");
   cmd->add_flag("-q,--quiet", a->quiet, "No progress and no table");
   cmd->callback([a] { run_batch_command(*a); });
+  // What the batch starts for each asset: not for users, so not in the help.
+  auto job = std::make_shared<std::string>();
+  CLI::App* child = app.add_subcommand("batch-job", "Run one asset's job file of a batch");
+  child->group("");
+  child->add_option("job", *job, "Job file (JSON) the batch wrote")->required();
+  child->callback([job] { run_batch_job(*job); });
 }
 
 }  // namespace chladni::cli

@@ -20,7 +20,7 @@
 #include "chladni/tools/paper_db_generate.hpp"
 #include "chladni/tools/paper_scenarios.hpp"
 #include "commands.hpp"
-#include "paper_db_cache.hpp"
+#include "chladni/tools/paper_db_cache.hpp"
 #include "parse_choices.hpp"
 #include "progress.hpp"
 #include "spectrogram.hpp"
@@ -60,7 +60,7 @@ struct AnalyzeArgs {
 runtime::PaperSoundDb database(const std::string& dir) {
   if (!dir.empty()) return runtime::load_paper_database(dir);
   std::string note;
-  runtime::PaperSoundDb db = default_paper_database(cache_dir(), note);
+  runtime::PaperSoundDb db = tools::default_paper_database(tools::cache_dir(), note);
   std::printf("%s\n", note.c_str());
   return db;
 }

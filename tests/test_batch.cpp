@@ -53,10 +53,17 @@ batch::OptionSchema fake_schema() {
       return batch::OptionSchema::Value;
     return batch::OptionSchema::Unknown;
   };
-  s.check = [](const std::vector<std::string>& args) {
-    for (std::size_t i = 0; i + 1 < args.size(); ++i)
+  s.kind = [kind = s.kind](const std::string& n) {
+    return n == "json" ? batch::OptionSchema::Managed : kind(n);
+  };
+  s.check = [](const std::string&, const std::string&, const std::vector<std::string>& args) {
+    batch::OptionSchema::Own own;
+    for (std::size_t i = 0; i + 1 < args.size(); ++i) {
       if (args[i] == "--max-modes" && args[i + 1] == "-1")
         throw chladni::InputError("--max-modes: negative");
+      own.memory = own.memory || args[i] == "--max-memory";
+    }
+    return own;
   };
   return s;
 }
@@ -189,6 +196,68 @@ TEST(BatchManifest, ErrorsNameTheManifestAndWhere) {
   check("m.csv", "mesh,repair\na.obj,maybe\n", ":2: column 'repair': a flag");
   check("m.csv", "mesh\n\"a.obj\n", ":2: unterminated quote");
   check("m.csv", "mesh,name\na.obj,\"x\"y\n", ":2: 'y' after a closing quote");
+}
+
+// A child's job travels as a file of the batch library's own keys: it reads back as written, an
+// asset's own memory limit keeps the batch's share out of it, and a bad job file is an input
+// error naming the file and the field; `chladni batch-job` runs one.
+TEST(BatchManifest, ChildJobsRoundTripAndBadOnesNameTheFileAndField) {
+  const fs::path d = fresh_dir("job");
+  write_box(d / "a.obj", 0.1, 0.1, 0.1);
+  std::ofstream(d / "m.json") << R"({"assets": [{"mesh": "a.obj", "max-memory": 2}]})";
+  std::ofstream(d / "m.csv") << "mesh,name\na.obj,x\n";
+  const batch::Manifest m = batch::read_manifest((d / "m.json").string(), "", fake_schema());
+  EXPECT_TRUE(m.assets[0].own_memory);
+  EXPECT_FALSE(
+      batch::read_manifest((d / "m.csv").string(), "", fake_schema()).assets[0].own_memory);
+
+  batch::ChildJob job;
+  job.mesh = (d / "a.obj").string();
+  job.output = (d / "a.chbank").string();
+  job.options = {"--max-modes", "4", "--no-transfer"};
+  job.memory_bytes = 2.5e9;
+  job.threads = 3;
+  job.summary = (d / "a.json").string();
+  job.stamp = std::string(32, 'f');
+  batch::write_child_job((d / "a.job.json").string(), job);
+  const batch::ChildJob back = batch::read_child_job((d / "a.job.json").string());
+  EXPECT_EQ(back.mesh, job.mesh);
+  EXPECT_EQ(back.output, job.output);
+  EXPECT_EQ(back.options, job.options);
+  EXPECT_EQ(back.memory_bytes, job.memory_bytes);
+  EXPECT_EQ(back.threads, job.threads);
+  EXPECT_EQ(back.summary, job.summary);
+  EXPECT_EQ(back.stamp, job.stamp);
+
+  const auto job_error = [&](const std::string& text) {
+    std::ofstream(d / "bad.job.json") << text;
+    try {
+      batch::read_child_job((d / "bad.job.json").string());
+    } catch (const chladni::InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  const std::string ok = nlohmann::json::parse(R"({"mesh": "a.obj", "output": "a.chbank",
+    "options": [], "memory_bytes": -1, "threads": 0, "summary": "", "stamp": ""})")
+                             .dump();
+  EXPECT_EQ(job_error(ok), "(no error)");
+  EXPECT_NE(job_error("[1]").find("bad.job.json: $: expected an object"), std::string::npos);
+  std::string wrong = ok;
+  wrong.replace(wrong.find("\"threads\":0"), 11, "\"threads\":\"2\"");
+  EXPECT_NE(job_error(wrong).find("$.threads: wrong type (string)"), std::string::npos)
+      << job_error(wrong);
+  EXPECT_NE(job_error(R"({"mesh": "a.obj"})").find("missing field 'output'"), std::string::npos);
+
+  // The job run by the command: the batch's threads and summary reach the precompute.
+  const chladni::test::CliResult r = run_cli("batch-job " + (d / "a.job.json").string());
+  ASSERT_EQ(r.code, 0) << r.output;
+  const nlohmann::json summary = read_json(d / "a.json");
+  EXPECT_EQ(summary["modes"]["kept"].get<int>(), 4);
+  EXPECT_EQ(batch::recorded_stamp((d / "a.chbank").string()), job.stamp);
+  const chladni::test::CliResult bad = run_cli("batch-job " + (d / "bad.job.json").string());
+  EXPECT_EQ(bad.code, 2);
+  EXPECT_NE(bad.output.find("bad.job.json"), std::string::npos) << bad.output;
 }
 
 // One bad asset is reported and skipped, the others go on; the exit code says not all

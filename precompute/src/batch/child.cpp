@@ -21,12 +21,6 @@ namespace chladni::precompute::batch {
 
 namespace {
 
-std::string gigabytes(double bytes) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", bytes / 1e9);
-  return buf;
-}
-
 // What the precompute said before exiting: its log from the last "error: " line on.
 std::string error_line(const std::string& log) {
   std::ifstream in(log);
@@ -49,12 +43,19 @@ Child start_child(const RunOptions& o, const std::string& log_dir, const Asset& 
   c.log = log_dir + "/" + a.name + ".log";
   c.json = log_dir + "/" + a.name + ".json";
   ::unlink(c.json.c_str());  // a stale summary must not pass for this run's
-  std::vector<std::string> args{o.exe, "precompute", a.mesh, "-o", a.output};
-  args.insert(args.end(), a.args.begin(), a.args.end());
-  if (!a.has_option("--max-memory")) args.insert(args.end(), {"--max-memory", gigabytes(memory)});
-  if (!a.has_option("--threads")) args.insert(args.end(), {"--threads", std::to_string(threads)});
-  args.insert(args.end(), {"--json", c.json});
-  if (!stamp.empty()) args.insert(args.end(), {"--batch-stamp", stamp});
+  ChildJob job;
+  job.mesh = a.mesh;
+  job.output = a.output;
+  job.options = a.args;
+  job.memory_bytes = a.own_memory ? -1.0 : memory;
+  job.threads = a.own_threads ? 0 : threads;
+  job.summary = c.json;
+  job.stamp = stamp;
+  const std::string job_path = log_dir + "/" + a.name + ".job.json";
+  write_child_job(job_path, job);
+  if (o.command.empty()) throw InternalError("batch: no command to run a job with");
+  std::vector<std::string> args = o.command;
+  args.push_back(job_path);
 
   // Everything the child needs is built before fork: after it only async-signal-safe calls.
   std::vector<char*> argv;

@@ -175,9 +175,9 @@ std::vector<Asset> resolve_entries(const std::vector<Entry>& entries, const fs::
                                   : resolve(output_dir, e.output);
       a.args = to_args(e.options);
       try {
-        std::vector<std::string> full{a.mesh, "-o", a.output};
-        full.insert(full.end(), a.args.begin(), a.args.end());
-        schema.check(full);
+        const OptionSchema::Own own = schema.check(a.mesh, a.output, a.args);
+        a.own_memory = own.memory;
+        a.own_threads = own.threads;
       } catch (const InputError& err) {
         throw InputError(e.where + ": " + err.what());
       }
@@ -198,10 +198,6 @@ std::vector<Asset> resolve_entries(const std::vector<Entry>& entries, const fs::
 }
 
 }  // namespace
-
-bool Asset::has_option(const std::string& option) const {
-  return std::find(args.begin(), args.end(), option) != args.end();
-}
 
 Manifest read_manifest(const std::string& path, const std::string& output_dir,
                        const OptionSchema& schema) {

@@ -6,16 +6,11 @@ namespace chladni::precompute::batch {
 
 namespace {
 
-// The batch decides these for every asset (docs/batch.md).
-bool managed(const std::string& key) {
-  return key == "o" || key == "json" || key == "quiet" || key == "q" || key == "batch-stamp" ||
-         key == "save-surface" || key == "help" || key == "h";
-}
-
 OptionSchema::Kind known_kind(const std::string& key, const std::string& where,
                               const OptionSchema& schema) {
-  if (managed(key)) throw InputError(where + ": --" + key + " is set by the batch for every asset");
   const OptionSchema::Kind kind = schema.kind(key);
+  if (kind == OptionSchema::Managed)
+    throw InputError(where + ": --" + key + " is set by the batch for every asset");
   if (kind == OptionSchema::Unknown)
     throw InputError(where + ": unknown precompute option '" + key +
                      "' (chladni precompute --help lists them)");

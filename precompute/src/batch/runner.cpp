@@ -107,8 +107,8 @@ std::vector<std::pair<std::size_t, Result>> Runner::reap(bool block) {
 
 bool Runner::requeue_alone(std::size_t asset, const Result& r,
                            std::deque<std::size_t>& alone) const {
-  if (r.status != Status::OverBudget || std::max(1, o_.jobs) <= 1 ||
-      m_.assets[asset].has_option("--max-memory") || ran_alone_[asset])
+  if (r.status != Status::OverBudget || std::max(1, o_.jobs) <= 1 || m_.assets[asset].own_memory ||
+      ran_alone_[asset])
     return false;
   if (o_.print) o_.print("over budget " + r.name + ": will retry alone at the end");
   alone.push_back(asset);

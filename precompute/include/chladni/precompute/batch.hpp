@@ -1,7 +1,9 @@
 #pragma once
-// The batch driver: a manifest of assets, each precomputed by its own `chladni precompute`
-// process (a crash takes down one asset, not the batch), largest first, several at once with the
-// memory budget shared, skipping assets whose soundbank is current. docs/batch.md.
+// The batch driver: a manifest of assets, each precomputed by its own process (a crash takes
+// down one asset, not the batch), largest first, several at once with the memory budget shared,
+// skipping assets whose soundbank is current. docs/batch.md. The options a manifest states are
+// the precompute command's, which the command's own parser checks (OptionSchema); a child gets
+// its job as a file of this library's format (ChildJob), so the driver names none of them.
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -16,8 +18,8 @@ struct Asset {
   std::vector<std::string> args;  ///< precompute options, e.g. {"--material", "brass"}
   std::string where;              ///< "MANIFEST: assets[3]" or "MANIFEST:7", for messages
   std::uint64_t cost = 0;         ///< scheduling weight: the mesh file's size in bytes
-  /// The manifest gives this option (e.g. "--max-memory") itself.
-  bool has_option(const std::string& option) const;
+  bool own_memory = false;        ///< its options set the eigen-solve's memory limit themselves
+  bool own_threads = false;       ///< its options set the thread count themselves
 };
 
 struct Manifest {
@@ -28,13 +30,36 @@ struct Manifest {
 
 /// What the precompute command accepts, from its own option parser.
 struct OptionSchema {
-  enum Kind { Unknown, Flag, Value };
+  /// Managed: the batch sets it for every asset (its output, summary, stamp), so a manifest may
+  /// not.
+  enum Kind { Unknown, Flag, Value, Managed };
   /// The kind of option `name` (long name without dashes, e.g. "max-modes").
   std::function<Kind(const std::string& name)> kind;
-  /// Checks one asset's arguments (MESH -o BANK OPTIONS...) as precompute would parse them;
-  /// throws InputError with the parser's message.
-  std::function<void(const std::vector<std::string>& args)> check;
+  /// Which of the batch's shares an asset's options set themselves.
+  struct Own {
+    bool memory = false, threads = false;
+  };
+  /// Checks one asset's options as precompute would parse them for `mesh` and `output`; throws
+  /// InputError with the parser's message.
+  std::function<Own(const std::string& mesh, const std::string& output,
+                    const std::vector<std::string>& options)>
+      check;
 };
+
+/// One asset's run as the batch hands it to a child process: a JSON file of this library's own
+/// keys, read back by whatever runs the job (`chladni batch-job FILE`).
+struct ChildJob {
+  std::string mesh, output;
+  std::vector<std::string> options;  ///< the asset's, as its manifest states them
+  double memory_bytes = -1;          ///< the eigen-solve's share of the budget; < 0: its own
+  int threads = 0;                   ///< threads for the asset; 0: its own
+  std::string summary;               ///< where the run writes its JSON summary
+  std::string stamp;                 ///< recorded in the soundbank's META ("batch_stamp")
+};
+/// Writes `job` to `path` atomically (InternalError on failure).
+void write_child_job(const std::string& path, const ChildJob& job);
+/// InputError naming `path` and the JSON path of what is wrong.
+ChildJob read_child_job(const std::string& path);
 
 /// Reads a JSON or CSV manifest (by extension: .csv is CSV, anything else JSON). Every problem
 /// throws InputError naming the manifest and the JSON path or CSV line. A non-empty
@@ -67,7 +92,9 @@ struct Result {
 };
 
 struct RunOptions {
-  std::string exe;            ///< the chladni executable whose `precompute` runs each asset
+  /// The program and its first arguments that run one job: the job file's path is appended
+  /// (e.g. {"/usr/bin/chladni", "batch-job"}).
+  std::vector<std::string> command;
   int jobs = 1;               ///< assets at once (per MPI rank)
   int threads = 0;            ///< per asset; 0: the cores divided among the jobs
   double memory_budget = -1;  ///< bytes for all jobs of this machine; < 0: 80 % of available

@@ -8,7 +8,7 @@
 
 #include "chladni/runtime/paper/paper_database.hpp"
 
-namespace chladni::cli {
+namespace chladni::tools {
 
 /// $CHLADNI_CACHE_DIR, else $XDG_CACHE_HOME/chladni, else $HOME/.cache/chladni; empty when
 /// CHLADNI_CACHE_DIR is set to "" or none is known (then nothing is cached).
@@ -28,4 +28,4 @@ runtime::PaperSoundDb read_paper_db_snapshot(const std::filesystem::path& path);
 /// the user saying which happened, where, and how long it took.
 runtime::PaperSoundDb default_paper_database(const std::filesystem::path& dir, std::string& note);
 
-}  // namespace chladni::cli
+}  // namespace chladni::tools

@@ -1,4 +1,4 @@
-#include "paper_db_cache.hpp"
+#include "chladni/tools/paper_db_cache.hpp"
 
 #include <fcntl.h>
 #include <sys/mman.h>
@@ -18,7 +18,7 @@
 #include "chladni/core/output_file.hpp"
 #include "chladni/tools/paper_db_generate.hpp"
 
-namespace chladni::cli {
+namespace chladni::tools {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'H', 'P', 'D', 'B', 'S', 'N', 'P'};
@@ -257,4 +257,4 @@ runtime::PaperSoundDb default_paper_database(const std::filesystem::path& dir, s
   return db;
 }
 
-}  // namespace chladni::cli
+}  // namespace chladni::tools
