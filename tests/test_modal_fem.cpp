@@ -412,7 +412,7 @@ TEST(ModalFem, FactorizationReusesTheMemoryChecksOrdering) {
   o.modes = 6;
   o.max_memory = 1e12;
   EigenOptions given = o;
-  check_eigen_memory(fem, o, &given.node_ordering);
+  check_memory_for_mesh(fem, o, &given.node_ordering);
   ASSERT_EQ(given.node_ordering.size(), fem.nodes.size());
   std::vector<std::int64_t> sorted = given.node_ordering;
   std::sort(sorted.begin(), sorted.end());
@@ -467,8 +467,8 @@ TEST(ModalFem, MemoryBeforeMeshingIsALowerBound) {
     TetOptions o;
     o.max_volume = coarse_max_volume(s) / 40;
     const double lower =
-        check_memory_before_meshing(s, std::abs(check_mesh(s).volume), o.max_volume, 2, o, eo);
-    const double exact = check_eigen_memory(make_fem_mesh(tetrahedralize(s, o), 2), eo);
+        check_memory_for_surface(s, std::abs(check_mesh(s).volume), o.max_volume, 2, o, eo);
+    const double exact = check_memory_for_mesh(make_fem_mesh(tetrahedralize(s, o), 2), eo);
     EXPECT_GT(lower, 0) << name;
     EXPECT_LE(lower, exact) << name;
     EXPECT_GT(lower, exact / 5) << name;  // measured: 0.31, 1 and 0.91 of it

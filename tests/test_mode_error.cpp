@@ -300,7 +300,7 @@ TEST(ModeError, RefinementOverTheBudgetTakesASmallerStep) {
   auto need = [&](double volume) {
     TetOptions t = o.tet;
     t.max_volume = volume;
-    return check_eigen_memory(make_fem_mesh(tetrahedralize(box, t), o.order), eo);
+    return check_memory_for_mesh(make_fem_mesh(tetrahedralize(box, t), o.order), eo);
   };
   const double m1 = need(full.passes[0].max_tet_volume), m2 = need(full.max_tet_volume);
   ASSERT_GT(m2, 2 * m1) << m1 << " " << m2;

@@ -6,7 +6,7 @@
 #include <numbers>
 
 #include "chladni/core/analytic_bar.hpp"
-#include "chladni/runtime/modal/impact.hpp"
+#include "chladni/runtime/modal/contact_weight.hpp"
 
 using namespace chladni;
 

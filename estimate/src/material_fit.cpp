@@ -8,7 +8,7 @@
 #include <numbers>
 
 #include "chladni/core/error.hpp"
-#include "chladni/runtime/modal/impact.hpp"
+#include "chladni/runtime/modal/contact_weight.hpp"
 
 namespace chladni::estimate {
 namespace {

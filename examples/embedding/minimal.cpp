@@ -1,10 +1,7 @@
 // The same from C++, one layer down: a filterbank, a ScenePlayer and a soundbank's modes.
 // Built by the tests; run it with a soundbank path or without (an analytic steel bar).
-#include <chladni/core/analytic_bar.hpp>
-#include <chladni/core/soundbank.hpp>
-#include <chladni/runtime/filterbank/make_filterbank.hpp>
-#include <chladni/runtime/scene/scene_objects.hpp>
-#include <chladni/runtime/scene/scene_player.hpp>
+#include <chladni/core.hpp>
+#include <chladni/runtime.hpp>
 #include <cmath>
 #include <cstdio>
 #include <vector>

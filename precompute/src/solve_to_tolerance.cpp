@@ -24,7 +24,7 @@ FemPass fem_pass(TetMesh tets, const PrecomputeOptions& o, const EigenOptions& e
   // Refused before assembly, the largest cost before the factor; the ordering the check found is
   // the factorization's.
   EigenOptions e = eo;
-  check_eigen_memory(fem, eo, &e.node_ordering);
+  check_memory_for_mesh(fem, eo, &e.node_ordering);
   FemMatrices km = assemble(fem, o.material, o.mass, o.threads, p.fraction);
   f.nonzeros = std::size_t(km.K.nonZeros());
   sw.start("eigen-solve");
@@ -277,12 +277,12 @@ TetMesh first_mesh(const SurfaceMesh& surface, const PrecomputeOptions& o, const
                         : auto_max_volume(o.material, o.max_frequency, o.order, surface);
   try {
     if (chosen || o.max_modes == 0)
-      check_memory_before_meshing(surface, std::abs(r.mesh.volume), topt.max_volume, o.order, o.tet,
-                                  eo);
+      check_memory_for_surface(surface, std::abs(r.mesh.volume), topt.max_volume, o.order, o.tet,
+                               eo);
     // A flat mesh over the budget is refused before it is made again, larger.
     TetOptions first_options = topt;
     first_options.before_remesh = [&](const TetMesh& m) {
-      check_eigen_memory(make_fem_mesh(m, o.order), eo);
+      check_memory_for_mesh(make_fem_mesh(m, o.order), eo);
     };
     return tetrahedralize(surface, first_options);
   } catch (const BudgetError& e) {

@@ -124,8 +124,8 @@ double default_memory_budget() {
   return pages > 0 && size > 0 ? 0.8 * double(pages) * double(size) : 0.0;
 }
 
-double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o,
-                          std::vector<std::int64_t>* node_ordering) {
+double check_memory_for_mesh(const FemMesh& mesh, const EigenOptions& o,
+                             std::vector<std::int64_t>* node_ordering) {
   if (o.max_memory <= 0) return 0;
   double entries = 0;
   const FactorEstimate est = node_graph_estimate(mesh, entries, node_ordering);
@@ -134,8 +134,8 @@ double check_eigen_memory(const FemMesh& mesh, const EigenOptions& o,
                       "; estimated from the mesh before assembly");
 }
 
-double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& sample,
-                                         double tetrahedra, const EigenOptions& o) {
+double check_memory_extrapolated(const FemMesh& coarse, const FemMesh& sample, double tetrahedra,
+                                 const EigenOptions& o) {
   if (o.max_memory <= 0) return 0;
   // DOFs per tetrahedron, at most what a large quality mesh has (P2: 1.32 nodes per tetrahedron
   // from Euler's formula with about 6.3 tetrahedra per vertex, so 3.95 DOFs; P1: 0.48) and never

@@ -11,7 +11,7 @@
 #include "chladni/gpu/context.hpp"
 #include "chladni/runtime/filterbank/filterbank.hpp"
 #include "chladni/runtime/scene/scene_player.hpp"
-#include "chladni/runtime/spsc_queue.hpp"
+#include "spsc_queue.hpp"
 
 namespace chladni::capi {
 

@@ -7,7 +7,7 @@
 #include <stdexcept>
 
 #include "chladni/core/error.hpp"
-#include "chladni/runtime/modal/impact.hpp"
+#include "chladni/runtime/modal/contact_weight.hpp"
 
 namespace chladni::runtime {
 namespace {

@@ -38,7 +38,7 @@ struct EigenOptions {
   /// when the basis the budget leaves fills before the modes converge, solve_modes refuses
   /// (BudgetError) with the numbers.
   double max_memory = 0;
-  /// A fill-reducing ordering of the mesh's nodes (check_eigen_memory's), reused by the
+  /// A fill-reducing ordering of the mesh's nodes (check_memory_for_mesh's), reused by the
   /// factorization so the graph is ordered once; empty: the factorization finds one.
   std::vector<std::int64_t> node_ordering;
 };
@@ -75,21 +75,21 @@ EigenResult solve_modes(const SparseMatrix& K, const SparseMatrix& M, const Eige
 /// of the node graph, scaled to three DOFs per node), in bytes. Throws BudgetError with the
 /// numbers when it exceeds options.max_memory; 0 without a budget or without CHOLMOD. The
 /// ordering the analysis found goes to `node_ordering`, for EigenOptions::node_ordering.
-double check_eigen_memory(const FemMesh& mesh, const EigenOptions& options,
-                          std::vector<std::int64_t>* node_ordering = nullptr);
+double check_memory_for_mesh(const FemMesh& mesh, const EigenOptions& options,
+                             std::vector<std::int64_t>* node_ordering = nullptr);
 /// Before meshing: a lower bound on the memory solve_modes will need for a mesh of at least
 /// `tetrahedra` elements of the same solid, extrapolated from two coarser meshes of it (`coarse`
 /// smaller than `sample`). Throws BudgetError ("at least ...") when even that exceeds
 /// options.max_memory, so an asset far over the budget is refused in seconds instead of after
 /// meshing; 0 when it cannot say.
-double check_eigen_memory_before_meshing(const FemMesh& coarse, const FemMesh& sample,
-                                         double tetrahedra, const EigenOptions& options);
+double check_memory_extrapolated(const FemMesh& coarse, const FemMesh& sample, double tetrahedra,
+                                 const EigenOptions& options);
 /// Before meshing `surface` (enclosing `solid` m^3) under `max_volume` with `tet`'s quality:
-/// check_eigen_memory_before_meshing on coarser meshes of it (seconds), so an asset far over the
+/// check_memory_extrapolated on coarser meshes of it (seconds), so an asset far over the
 /// budget is refused before minutes of meshing. The lower bound in bytes; 0 where the mesh is
 /// close to the coarsest one (quick to make), without a budget, or when it cannot say.
-double check_memory_before_meshing(const SurfaceMesh& surface, double solid, double max_volume,
-                                   int order, const TetOptions& tet, const EigenOptions& options);
+double check_memory_for_surface(const SurfaceMesh& surface, double solid, double max_volume,
+                                int order, const TetOptions& tet, const EigenOptions& options);
 /// Which factorization solve_modes uses in this build.
 std::string factorization_name();
 

@@ -1,4 +1,4 @@
-#include "chladni/runtime/modal/impact.hpp"
+#include "chladni/runtime/modal/contact_weight.hpp"
 
 #include <cmath>
 #include <numbers>

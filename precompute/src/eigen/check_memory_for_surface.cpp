@@ -11,8 +11,8 @@ namespace chladni::precompute {
 // Coarser meshes first give a lower bound on that check's figure: from the coarsest quality mesh,
 // bounds 5 times smaller each time down to 27 times `max_volume` (edges 3 times as long),
 // stopping once a sample has kSampleTets tetrahedra, so the samples take seconds.
-double check_memory_before_meshing(const SurfaceMesh& surface, double solid, double max_volume,
-                                   int order, const TetOptions& tet, const EigenOptions& eo) {
+double check_memory_for_surface(const SurfaceMesh& surface, double solid, double max_volume,
+                                int order, const TetOptions& tet, const EigenOptions& eo) {
   constexpr std::size_t kSampleTets = 50000;
   // Refused at once for its size by tetrahedralize, or close to the coarsest mesh: quick.
   const double coarsest = coarse_max_volume(surface);
@@ -39,8 +39,8 @@ double check_memory_before_meshing(const SurfaceMesh& surface, double solid, dou
   const double t1 = double(prev->tets.size()), t2 = double(last->tets.size());
   const double growth = std::clamp(std::log(t2 / t1) / std::log(prev_bound / last_bound), 0.0, 1.0);
   const double tets = std::max(solid / max_volume, t2 * std::pow(last_bound / max_volume, growth));
-  return check_eigen_memory_before_meshing(make_fem_mesh(*prev, order), make_fem_mesh(*last, order),
-                                           tets, eo);
+  return check_memory_extrapolated(make_fem_mesh(*prev, order), make_fem_mesh(*last, order), tets,
+                                   eo);
 }
 
 }  // namespace chladni::precompute
