@@ -23,12 +23,12 @@ cmake --build build/asan -j "$jobs"
 # Lavapipe leaks a little per VkInstance and is dlclose'd before LeakSanitizer reports, which
 # leaves the leak unattributable; preloading it (after libasan, which must come first) keeps it
 # mapped so tests/lsan.supp can name it. Leak checking stays on for everything of ours.
-# Sixteen tests that take 30-190 s each under the sanitizers run in the release stage only: their
+# Eighteen tests that take 25-190 s each under the sanitizers run in the release stage only: their
 # code (FEM, the Lanczos solver, the error estimate, local and uniform refinement, BEM with
 # GMRES, radiate, the alpha wrap retried with a wider ball, the thin spheroid's BEM and wave
-# solves, the wave solve's sphere harmonics and convergence) runs under the sanitizers in smaller
-# tests too (all but the retry of a refinement step over the memory budget, plain control flow),
-# and keeping them here would push CI past its 30 minutes.
+# solves, the wave solve's sphere harmonics and convergence, precompute at extreme scales) runs
+# under the sanitizers in smaller tests too (all but the retry of a refinement step over the
+# memory budget, plain control flow), and keeping them here would push CI past its 30 minutes.
 heavy='^(ModalFem\.(SteelBarMatchesTimoshenkoWithinOnePercent|MaxModesMeshesForTheModesAskedFor)|'
 heavy+='CliRadiate\.SphereHarmonicMatchesTheExactSolution|'
 heavy+='ModeError\.(BracketsTheBarsErrorAndRefinementMeetsTheTolerance|'
@@ -36,6 +36,7 @@ heavy+='LocalRefinementMeetsTheToleranceOnAThinFin|RefinementOverTheBudgetTakesA
 heavy+='BemAssets\.BowlLowestModesByBemAndAudibleAtTheirPredictedLevel|ThinRadiator\..*|'
 heavy+='WaveTransfer\.(SphereHarmonicsAtKa30|SphereHarmonicsMatchTheExactField|ErrorHalvesAsTheCellsHalve)|'
 heavy+='ThinBody\.(PoorlyShapedFirstMeshIsReplacedByAQualityMesh|ThinWalledBowlIsRefinedByBisectionWhereThatIsSmaller)|'
+heavy+='CliHostile\.(TinySolidsGetTheirModesOrAClearRefusal|HugeSolidsKeepTheModesAskedForOrAreRefusedNamingTheUnit)|'
 heavy+='RepairLadder\.(SelfIntersectingSoupBecomesASolidOrIsRefused|WrappedBarRingsLikeTheCleanBar))$'
 preload=""
 lvp=$(ls /usr/lib/*/libvulkan_lvp.so 2>/dev/null | head -n 1 || true)
