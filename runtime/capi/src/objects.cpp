@@ -4,8 +4,8 @@
 #include <numbers>
 
 #include "chladni/core/soundbank.hpp"
-#include "chladni/runtime/scene/scene_shakers.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
+#include "chladni/runtime/scene/scene_shakers.hpp"
 #include "handles.hpp"
 
 using namespace chladni;

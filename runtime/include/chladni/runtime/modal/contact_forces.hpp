@@ -1,7 +1,7 @@
 #pragma once
 // The sound of an impact while its contact lasts. The filterbank receives, at the first sample
-// after the contact starts, the state that is exact once the contact is over (contact_weight.hpp's W,
-// advanced to that sample). During the contact that state is wrong: it jumps in at once, where
+// after the contact starts, the state that is exact once the contact is over (contact_weight.hpp's
+// W, advanced to that sample). During the contact that state is wrong: it jumps in at once, where
 // the true response builds up from zero under the half-sine force F(s) = (J pi / 2 tau)
 // sin(pi s / tau). ContactForces adds the difference, per mode
 //   d[n] = z_true(t_n) - W exp(lambda (t_n - t0)),
