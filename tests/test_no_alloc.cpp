@@ -151,8 +151,12 @@ TEST(CApi, PostingAndRenderingDoNotAllocate) {
     EXPECT_EQ(chladni_post_impact(rt, &im), CHLADNI_OK);
     const double pos[3] = {0.01 * b, 0, 0};
     EXPECT_EQ(chladni_post_listener(rt, t + 0.002, pos, fwd, up), CHLADNI_OK);
-    if (b % 5 == 0) EXPECT_EQ(chladni_post_shake(rt, b % 10 ? gravel : maraca, t, 0.7), CHLADNI_OK);
-    if (b == 100) EXPECT_EQ(chladni_remove(rt, 3), CHLADNI_OK);
+    if (b % 5 == 0) {
+      EXPECT_EQ(chladni_post_shake(rt, b % 10 ? gravel : maraca, t, 0.7), CHLADNI_OK);
+    }
+    if (b == 100) {
+      EXPECT_EQ(chladni_remove(rt, 3), CHLADNI_OK);
+    }
     EXPECT_EQ(chladni_render(rt, out.data(), 256), CHLADNI_OK);
   }
   g_count = false;
