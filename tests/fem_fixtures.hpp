@@ -50,6 +50,20 @@ inline SurfaceMesh icosphere(double r, int level) {
   return m;
 }
 
+// A soundbank with icosphere(r, level)'s surface and its exact normals, and no modes yet: the
+// radiation tests add modes that move it.
+inline Soundbank sphere_surface_bank(double r, int level) {
+  const SurfaceMesh s = icosphere(r, level);
+  Soundbank bank;
+  bank.vertices = s.vertices;
+  bank.triangles = s.triangles;
+  for (const Vec3& v : s.vertices) {
+    const Vec3 n = scale(v, 1.0 / norm(v));
+    bank.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
+  }
+  return bank;
+}
+
 /// Box [0, L] x [0, W] x [0, H] with n[0] x n[1] x n[2] cells on its faces, outward triangles.
 inline SurfaceMesh box_surface(const Vec3& size, const std::array<int, 3>& n) {
   SurfaceMesh m;

@@ -27,19 +27,13 @@ using precompute::AcousticOptions;
 // A sphere's surface with modes of rigid motion and a breathing-like pattern: two degenerate
 // partners 2e-5 apart in frequency, and single modes spread over two refinement levels.
 Soundbank sphere_bank() {
-  const test::SurfaceMesh s = test::icosphere(0.1, 2);
-  Soundbank bank;
-  bank.vertices = s.vertices;
-  bank.triangles = s.triangles;
-  for (const Vec3& v : s.vertices) {
-    const Vec3 n = scale(v, 1.0 / norm(v));
-    bank.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
-  }
+  Soundbank bank = test::sphere_surface_bank(0.1, 2);
+  const std::vector<Vec3>& vertices = bank.vertices;
   const double hz[] = {1400, 1400 * (1 + 2e-5), 1600, 1800, 2400, 2700, 3000};
   for (int m = 0; m < 7; ++m) {
     bank.omega.push_back(2 * std::numbers::pi * hz[m]);
     bank.decay.push_back(3.0);
-    for (const Vec3& v : s.vertices) {
+    for (const Vec3& v : vertices) {
       const double x = v[0] / 0.1, y = v[1] / 0.1, z = v[2] / 0.1;
       const double w = m % 3 == 0 ? 1.0 : m % 3 == 1 ? x * y : 1.5 * z * z - 0.5;
       const Vec3 d = m == 0 ? Vec3{1, 0, 0} : m == 1 ? Vec3{0, 1, 0} : scale(v, w / 0.1);

@@ -23,18 +23,20 @@ namespace {
 
 Scene shaken_scene() {
   return parse_scene(nlohmann::json::parse(R"({
-    "sample_rate": 48000, "channels": 2, "duration": 1.0,
+    "sample_rate": 44100, "channels": 2, "duration": 1.0,
+    "listener": {"position": [0, 1.2, 0.5]},
     "objects": [
-      {"name": "bar", "position": [0.3, 1, 0], "bar": {"length": 0.3}},
-      {"name": "cup", "position": [-0.5, 1, 0],
-       "modes": [{"frequency": 900, "decay": 8, "amplitude": 0.2}]}
+      {"name": "rod", "position": [0.2, 1, 0], "bar": {"length": 0.25}},
+      {"name": "glass", "position": [-0.4, 1, 0],
+       "modes": [{"frequency": 1200, "decay": 5, "amplitude": 0.1},
+                 {"frequency": 2650, "decay": 9, "amplitude": 0.05}]}
     ],
     "events": [
-      {"time": 0.0, "type": "shake", "object": "bar", "instrument": "gravel", "energy": 0.8},
-      {"time": 0.1, "type": "impact", "object": "bar", "impulse": 0.01},
-      {"time": 0.3, "type": "shake", "object": "bar", "instrument": "gravel", "energy": 0.5},
-      {"time": 0.4, "type": "shake", "object": "cup", "instrument": "coins"},
-      {"time": 0.6, "type": "impact", "object": "cup", "impulse": 0.01}
+      {"time": 0.0, "type": "shake", "object": "rod", "instrument": "gravel", "energy": 0.8},
+      {"time": 0.1, "type": "impact", "object": "rod", "impulse": 0.01},
+      {"time": 0.3, "type": "shake", "object": "rod", "instrument": "gravel", "energy": 0.5},
+      {"time": 0.4, "type": "shake", "object": "glass", "instrument": "coins"},
+      {"time": 0.6, "type": "impact", "object": "glass", "impulse": 0.01}
     ]})"),
                      ".");
 }

@@ -27,18 +27,12 @@ using precompute::AcousticOptions;
 // the frequency that gives its ka.
 Soundbank sphere_modes(double a, int level, const std::vector<std::pair<int, double>>& l_ka,
                        double c) {
-  const test::SurfaceMesh s = test::icosphere(a, level);
-  Soundbank bank;
-  bank.vertices = s.vertices;
-  bank.triangles = s.triangles;
-  for (const Vec3& v : s.vertices) {
-    const Vec3 n = scale(v, 1.0 / norm(v));
-    bank.normals.push_back({float(n[0]), float(n[1]), float(n[2])});
-  }
+  Soundbank bank = test::sphere_surface_bank(a, level);
+  const std::vector<Vec3>& vertices = bank.vertices;
   for (const auto& [l, ka] : l_ka) {
     bank.omega.push_back(ka / a * c);
     bank.decay.push_back(0.0);
-    for (const Vec3& v : s.vertices) {
+    for (const Vec3& v : vertices) {
       const Vec3 n = scale(v, 1.0 / norm(v));
       const Vec3 d = scale(n, std::legendre(unsigned(l), n[2]));
       for (int q = 0; q < 3; ++q) bank.shapes.push_back(float(d[q]));
