@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <numbers>
 
-#include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute.hpp"
 #include "elastic_reference.hpp"
 #include "fem_fixtures.hpp"
 

@@ -19,7 +19,7 @@
 #include "chladni/estimate/material_fit.hpp"
 #include "chladni/estimate/recording.hpp"
 #include "chladni/estimate/struck_modes.hpp"
-#include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute.hpp"
 #include "commands.hpp"
 #include "estimate_plot.hpp"
 

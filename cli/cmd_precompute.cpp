@@ -11,8 +11,8 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/output_file.hpp"
+#include "chladni/precompute.hpp"
 #include "chladni/precompute/blas_kernels.hpp"
-#include "chladni/precompute/precompute.hpp"
 #include "commands.hpp"
 #include "parse_choices.hpp"
 #include "progress.hpp"

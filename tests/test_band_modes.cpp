@@ -7,7 +7,7 @@
 #include "../precompute/src/band_modes.hpp"
 #include "../precompute/src/surface/local_thickness.hpp"
 #include "chladni/core/material.hpp"
-#include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute.hpp"
 #include "fem_fixtures.hpp"
 
 using namespace chladni;

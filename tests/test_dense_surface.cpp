@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "../precompute/src/surface/simplify_surface.hpp"
-#include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "cli_support.hpp"
 #include "fem_fixtures.hpp"

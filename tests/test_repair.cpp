@@ -10,8 +10,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "chladni/precompute.hpp"
 #include "chladni/precompute/mesh_repair.hpp"
-#include "chladni/precompute/precompute.hpp"
 #include "cli_support.hpp"
 #include "fem_fixtures.hpp"
 #include "test_support.hpp"

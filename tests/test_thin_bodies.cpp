@@ -10,8 +10,8 @@
 #include <numbers>
 
 #include "chladni/core/material.hpp"
+#include "chladni/precompute.hpp"
 #include "chladni/precompute/mesh_repair.hpp"
-#include "chladni/precompute/precompute.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
 #include "chladni/precompute/tet_mesh.hpp"
 #include "cli_support.hpp"

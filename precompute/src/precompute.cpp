@@ -1,4 +1,4 @@
-#include "chladni/precompute/precompute.hpp"
+#include "chladni/precompute.hpp"
 
 #include <algorithm>
 #include <chrono>

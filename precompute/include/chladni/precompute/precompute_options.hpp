@@ -1,7 +1,7 @@
 #pragma once
 // What the pipeline takes (PrecomputeOptions), what it reports (PrecomputeReport) and the hooks it
 // reports progress through: the types its stages share, apart from the functions that run them
-// (precompute.hpp).
+// (chladni/precompute.hpp).
 #include <functional>
 #include <string>
 
