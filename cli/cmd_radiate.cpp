@@ -20,6 +20,7 @@
 #include "chladni/precompute/acoustic_transfer.hpp"
 #include "chladni/precompute/memory_budget.hpp"
 #include "chladni/precompute/surface_mesh.hpp"
+#include "chladni/precompute/velocity_pattern.hpp"
 #include "commands.hpp"
 #include "parse_choices.hpp"
 
@@ -35,7 +36,7 @@ struct RadiateArgs {
   int order = 0;
 };
 
-// "sphere-harmonic:l=2,m=0[,U=1]" or "uniform[:U=1]": values per vertex about the centroid.
+// "sphere-harmonic:l=2,m=0[,U=1]" or "uniform[:U=1]" (velocity_pattern.hpp).
 std::vector<cd> pattern_velocity(const std::string& spec, const precompute::SurfaceMesh& mesh) {
   const auto colon = spec.find(':');
   const std::string name = spec.substr(0, colon);
@@ -56,34 +57,10 @@ std::vector<cd> pattern_velocity(const std::string& spec, const precompute::Surf
   const int l = int(params["l"]), m = int(params["m"]);
   if (name != "sphere-harmonic" && name != "uniform")
     throw InputError("--pattern: unknown pattern '" + name + "' (sphere-harmonic, uniform)");
+  if (name == "uniform") return precompute::uniform_velocity(mesh, params["U"]);
   if (l != params["l"] || m != params["m"] || l < 0 || l > 40 || std::abs(m) > l)
     throw InputError("--pattern: need integers 0 <= l <= 40 and |m| <= l");
-  // Area-weighted centroid of the surface.
-  Vec3 c{0, 0, 0};
-  double area = 0;
-  for (const auto& t : mesh.triangles) {
-    const Vec3 n = triangle_normal(mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
-    const double a = 0.5 * std::sqrt(dot(n, n));
-    for (int k = 0; k < 3; ++k)
-      c[k] += a * (mesh.vertices[t[0]][k] + mesh.vertices[t[1]][k] + mesh.vertices[t[2]][k]) / 3;
-    area += a;
-  }
-  for (double& x : c) x /= area;
-  std::vector<cd> out(mesh.vertices.size());
-  for (std::size_t v = 0; v < out.size(); ++v) {
-    if (name == "uniform") {
-      out[v] = params["U"];
-      continue;
-    }
-    const Vec3 d = sub(mesh.vertices[v], c);
-    const double r = std::sqrt(dot(d, d));
-    const double theta = r > 0 ? std::acos(std::clamp(d[2] / r, -1.0, 1.0)) : 0.0;
-    const double phi = std::atan2(d[1], d[0]);
-    // U P_l^|m|(cos t) {cos, sin}(|m| p), without the Condon-Shortley phase.
-    const double p = std::assoc_legendre(unsigned(l), unsigned(std::abs(m)), std::cos(theta));
-    out[v] = params["U"] * p * (m >= 0 ? std::cos(m * phi) : std::sin(-m * phi));
-  }
-  return out;
+  return precompute::harmonic_velocity(mesh, l, m, params["U"]);
 }
 
 precompute::SurfaceMesh read_radiating_mesh(const RadiateArgs& a) {

@@ -16,6 +16,7 @@
 #include "chladni/core/soundbank.hpp"
 #include "chladni/core/transfer.hpp"
 #include "chladni/precompute/acoustic_transfer.hpp"
+#include "chladni/precompute/velocity_pattern.hpp"
 #include "fem_fixtures.hpp"
 
 namespace chladni {
@@ -161,4 +162,22 @@ TEST(BemDriver, SideProcessReturnsModesAndReportsFailures) {
 }
 
 }  // namespace
+// The test patterns' values: on a sphere about its centre, P_1^0 is z / r and P_2^2 cos 2 phi is
+// 3 (x^2 - y^2) / r^2; the uniform pattern is flat; an impossible harmonic is refused.
+TEST(VelocityPattern, HarmonicsFollowTheirFormulasAboutTheCentroid) {
+  const test::SurfaceMesh s = test::icosphere(0.2, 2);
+  const std::vector<cd> p10 = precompute::harmonic_velocity(s, 1, 0, 2.0);
+  const std::vector<cd> p22 = precompute::harmonic_velocity(s, 2, 2, 1.0);
+  const std::vector<cd> flat = precompute::uniform_velocity(s, 0.5);
+  ASSERT_EQ(p10.size(), s.vertices.size());
+  for (std::size_t v = 0; v < s.vertices.size(); ++v) {
+    const Vec3& x = s.vertices[v];
+    EXPECT_NEAR(p10[v].real(), 2.0 * x[2] / 0.2, 1e-9);
+    EXPECT_NEAR(p22[v].real(), 3.0 * (x[0] * x[0] - x[1] * x[1]) / 0.04, 1e-9);
+    EXPECT_EQ(flat[v], cd(0.5));
+  }
+  EXPECT_THROW(precompute::harmonic_velocity(s, 41, 0, 1.0), InputError);
+  EXPECT_THROW(precompute::harmonic_velocity(s, 2, 3, 1.0), InputError);
+}
+
 }  // namespace chladni
