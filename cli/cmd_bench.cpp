@@ -76,7 +76,7 @@ Record measure(const BenchArgs& a, const std::string& backend, uint32_t n) {
   req.channels = 1;
   req.threads = a.threads;
   req.max_frames = a.block * std::max(1u, a.batch);
-  auto fb = make_filterbank(backend, "auto", req);
+  auto fb = make_filterbank(backend, req);
   // Modes spread over the audible band with decays of 0.5-20 1/s, all ringing.
   std::mt19937 rng(1234);
   std::uniform_real_distribution<double> logf(std::log(40.0), std::log(18000.0)), dec(0.5, 20.0);

@@ -82,7 +82,7 @@ void run_synthesis(const AnalyzeArgs& a, PaperAnimation& anim) {
     r.channels = 2;
     r.capacity = 1u << 18;
     r.max_frames = 1024;
-    fb = make_filterbank(a.backend, "auto", r);
+    fb = make_filterbank(a.backend, r);
   }
   runtime::PaperRenderReport rep;
   const AudioBuffer audio = runtime::render_paper(anim, db ? &*db : nullptr, fb.get(), o, &rep);

@@ -94,10 +94,10 @@ void play(const PlayArgs& a, const Scene& scene) {
   Playback p;
   p.timeline = &timeline;
   p.channels = scene.channels;
+  // A pipelined GPU hands the last samples back the filterbank's latency later.
   p.stop_at =
       (a.duration > 0 ? runtime::first_sample(a.duration, scene.sample_rate) : timeline.end()) +
-      prepared.filterbank
-          ->latency();  // a pipelined GPU hands the last samples back that much later
+      prepared.filterbank->latency();
   RtAudio::StreamParameters out;
   out.deviceId = a.device >= 0 ? static_cast<unsigned>(a.device) : audio.getDefaultOutputDevice();
   out.nChannels = static_cast<unsigned>(scene.channels);

@@ -58,9 +58,12 @@ std::vector<cd> pattern_velocity(const std::string& spec, const precompute::Surf
   if (name != "sphere-harmonic" && name != "uniform")
     throw InputError("--pattern: unknown pattern '" + name + "' (sphere-harmonic, uniform)");
   if (name == "uniform") return precompute::uniform_velocity(mesh, params["U"]);
-  if (l != params["l"] || m != params["m"] || l < 0 || l > 40 || std::abs(m) > l)
-    throw InputError("--pattern: need integers 0 <= l <= 40 and |m| <= l");
-  return precompute::harmonic_velocity(mesh, l, m, params["U"]);
+  if (l != params["l"] || m != params["m"]) throw InputError("--pattern: l and m must be integers");
+  try {
+    return precompute::harmonic_velocity(mesh, l, m, params["U"]);  // it checks their range
+  } catch (const InputError& e) {
+    throw InputError(std::string("--pattern: ") + e.what());
+  }
 }
 
 precompute::SurfaceMesh read_radiating_mesh(const RadiateArgs& a) {

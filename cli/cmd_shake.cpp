@@ -85,7 +85,7 @@ std::unique_ptr<runtime::Filterbank> make_shake_filterbank(
   req.capacity = static_cast<uint32_t>(std::max<std::size_t>(slots, 64));
   req.max_frames = std::max<uint32_t>(a.block, 256);
   req.max_streams = a.voices;
-  return make_filterbank(a.backend, "auto", req);
+  return make_filterbank(a.backend, req);
 }
 
 // The peak before --normalize; a non-finite sample is a bug, not a loud sound.

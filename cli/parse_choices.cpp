@@ -23,10 +23,8 @@ runtime::CpuIsa parse_isa(const std::string& name) {
 }
 
 std::unique_ptr<runtime::Filterbank> make_filterbank(const std::string& backend,
-                                                     const std::string& isa,
                                                      runtime::FilterbankRequest r) {
   r.backend = parse_backend(backend, "--backend");
-  r.isa = parse_isa(isa);
   r.warn = warn;
   return runtime::make_filterbank(r);
 }

@@ -18,10 +18,9 @@ gpu::DeviceChoice parse_backend(const std::string& name, const std::string& opti
 /// The --isa option: auto, scalar, avx2 or avx512, and one this processor runs.
 runtime::CpuIsa parse_isa(const std::string& name);
 
-/// A filterbank for the --backend NAME and --isa NAME options: gpu without a device falls back to
-/// the CPU with one warning on stderr. The request's other fields are taken as given.
+/// A filterbank for the --backend NAME option: gpu without a device falls back to the CPU with
+/// one warning on stderr. The request's other fields are taken as given.
 std::unique_ptr<runtime::Filterbank> make_filterbank(const std::string& backend,
-                                                     const std::string& isa,
                                                      runtime::FilterbankRequest request);
 
 /// Vulkan context for the transfer kernels: --transfer-backend gpu (warns and returns null
