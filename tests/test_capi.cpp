@@ -33,14 +33,14 @@ struct Runtime {
 const std::vector<InlineMode> kBowl = {{441, 2.0, 0.02}, {1142, 3.0, 0.01}, {2650, 5.0, 0.004}};
 const std::vector<InlineMode> kBar = {{576.5, 4.0, 0.01}, {1589, 7.0, 0.006}};
 
-chladni_bank* bank(chladni_runtime* rt, const std::vector<InlineMode>& modes) {
+chladni_bank bank(chladni_runtime* rt, const std::vector<InlineMode>& modes) {
   std::vector<double> f, d, a;
   for (const InlineMode& m : modes) {
     f.push_back(m.frequency);
     d.push_back(m.decay);
     a.push_back(m.amplitude);
   }
-  chladni_bank* b = nullptr;
+  chladni_bank b = {0};
   EXPECT_EQ(chladni_bank_from_modes(rt, f.data(), d.data(), a.data(), f.size(), &b), CHLADNI_OK);
   return b;
 }
@@ -69,16 +69,17 @@ AudioBuffer offline(const Scene& scene) {
   return runtime::render_scene(scene, objects, fb, {});
 }
 
-// The scene's objects spawned through the C API, as objects 0 and 1.
-void spawn_objects(chladni_runtime* rt, const Scene& scene) {
-  chladni_bank* banks[2] = {bank(rt, kBowl), bank(rt, kBar)};
+// The scene's objects spawned through the C API, in its order.
+std::vector<chladni_object> spawn_objects(chladni_runtime* rt, const Scene& scene) {
+  const chladni_bank banks[2] = {bank(rt, kBowl), bank(rt, kBar)};
   const double identity[4] = {1, 0, 0, 0};
+  std::vector<chladni_object> objects(2, chladni_object{0});
   for (int k = 0; k < 2; ++k) {
-    uint32_t id = 0;
     const Vec3& p = scene.objects[k].position;
-    ASSERT_EQ(chladni_spawn(rt, banks[k], p.data(), identity, 1.0, &id), CHLADNI_OK);
-    EXPECT_EQ(id, uint32_t(k));
+    EXPECT_EQ(chladni_object_spawn(rt, banks[k], p.data(), identity, 1.0, &objects[k]), CHLADNI_OK);
+    EXPECT_NE(objects[k].id, 0u);
   }
+  return objects;
 }
 
 }  // namespace
@@ -105,23 +106,24 @@ TEST(CApi, RendersWhatTheOfflineRendererDoes) {
   const AudioBuffer ref = offline(scene);
 
   Runtime r;
-  spawn_objects(r.rt, scene);
+  const std::vector<chladni_object> objects = spawn_objects(r.rt, scene);
   for (int k = 0; k < 3; ++k) {
     chladni_impact im{};
-    im.object = static_cast<uint32_t>(which[k]);
+    im.object = objects[which[k]];
     im.time = times[k];
     im.impulse = impulses[k];
     im.direction[2] = -1;
     im.vertex = -1;
     im.contact_time = contacts[k];
-    ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+    ASSERT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_OK);
   }
   const double fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1};
-  ASSERT_EQ(chladni_post_listener(r.rt, step.time, step.position->data(), fwd, up), CHLADNI_OK);
+  ASSERT_EQ(chladni_listener_set(r.rt, step.time, step.position->data(), fwd, up), CHLADNI_OK);
   // An engine's callback size, unrelated to the runtime's block.
   std::vector<float> out(ref.samples.size());
   for (std::size_t n = 0; n < ref.frames(); n += 480)
-    ASSERT_EQ(chladni_render(r.rt, out.data() + 2 * n, 480), CHLADNI_OK) << chladni_last_error();
+    ASSERT_EQ(chladni_runtime_render(r.rt, out.data() + 2 * n, 480), CHLADNI_OK)
+        << chladni_last_error();
   const double peak = test::max_abs(ref.samples);
   ASSERT_GT(peak, 1e-4);
   EXPECT_LT(test::max_diff(ref.samples, out), 1e-6 * peak);
@@ -151,32 +153,33 @@ TEST(CApi, ShakesAsTheOfflineRendererDoes) {
   const AudioBuffer ref = offline(scene);
 
   Runtime r;
-  spawn_objects(r.rt, scene);
-  uint32_t shakers[2] = {9, 9};
+  const std::vector<chladni_object> objects = spawn_objects(r.rt, scene);
+  chladni_shaker shakers[2] = {{9}, {9}};
   chladni_shaker_desc d{};
-  d.object = 0;
+  d.object = objects[0];
   d.instrument = "gravel";
   d.resonate_object = 1;
   ASSERT_EQ(chladni_shaker_add(r.rt, &d, &shakers[0]), CHLADNI_OK) << chladni_last_error();
-  d.object = 1;
+  d.object = objects[1];
   d.instrument = "maraca";
   d.resonate_object = 0;
   ASSERT_EQ(chladni_shaker_add(r.rt, &d, &shakers[1]), CHLADNI_OK) << chladni_last_error();
-  EXPECT_EQ(shakers[0], 0u);
-  EXPECT_EQ(shakers[1], 1u);
-  ASSERT_EQ(chladni_post_shake(r.rt, shakers[0], gravel.time, gravel.energy), CHLADNI_OK);
-  ASSERT_EQ(chladni_post_shake(r.rt, shakers[1], maraca.time, maraca.energy), CHLADNI_OK);
-  ASSERT_EQ(chladni_post_shake(r.rt, shakers[0], again.time, again.energy), CHLADNI_OK);
+  EXPECT_EQ(shakers[0].id, 1u);
+  EXPECT_EQ(shakers[1].id, 2u);
+  ASSERT_EQ(chladni_shaker_shake(r.rt, shakers[0], gravel.time, gravel.energy), CHLADNI_OK);
+  ASSERT_EQ(chladni_shaker_shake(r.rt, shakers[1], maraca.time, maraca.energy), CHLADNI_OK);
+  ASSERT_EQ(chladni_shaker_shake(r.rt, shakers[0], again.time, again.energy), CHLADNI_OK);
   chladni_impact im{};
+  im.object = objects[0];
   im.time = hit.time;
   im.impulse = hit.impulse;
   im.direction[2] = -1;
   im.vertex = -1;
-  ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  ASSERT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_OK);
   std::vector<float> out(ref.samples.size());
   for (std::size_t n = 0; n < ref.frames(); n += 441)
-    ASSERT_EQ(chladni_render(r.rt, out.data() + 2 * n,
-                             uint32_t(std::min<std::size_t>(441, ref.frames() - n))),
+    ASSERT_EQ(chladni_runtime_render(r.rt, out.data() + 2 * n,
+                                     uint32_t(std::min<std::size_t>(441, ref.frames() - n))),
               CHLADNI_OK)
         << chladni_last_error();
   // Silence before the first shake; both shakers sound (the maraca alone before the hit).
@@ -189,22 +192,23 @@ TEST(CApi, ShakesAsTheOfflineRendererDoes) {
 
   // Bad shakers and shakes name what is wrong.
   d.instrument = "kazoo";
-  uint32_t k = 0;
+  chladni_shaker k{0};
   EXPECT_EQ(chladni_shaker_add(r.rt, &d, &k), CHLADNI_INPUT_ERROR);
   EXPECT_NE(std::string(chladni_last_error()).find("unknown instrument 'kazoo'"), std::string::npos)
       << chladni_last_error();
-  EXPECT_EQ(chladni_post_shake(r.rt, 7, 0.7, 0.5), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_shaker_shake(r.rt, {7}, 0.7, 0.5), CHLADNI_INPUT_ERROR);
   EXPECT_NE(std::string(chladni_last_error()).find("no shaker 7"), std::string::npos);
-  EXPECT_EQ(chladni_post_shake(r.rt, 0, 0.7, 1.5), CHLADNI_INPUT_ERROR);
-  EXPECT_EQ(chladni_post_shake(r.rt, 0, NAN, 0.5), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_shaker_shake(r.rt, shakers[0], 0.7, 1.5), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_shaker_shake(r.rt, shakers[0], NAN, 0.5), CHLADNI_INPUT_ERROR);
   // Removing the bowl silences its gravel and refuses its shakes.
-  ASSERT_EQ(chladni_post_shake(r.rt, 0, chladni_time(r.rt), 1.0), CHLADNI_OK);
-  ASSERT_EQ(chladni_remove(r.rt, 0), CHLADNI_OK);
-  ASSERT_EQ(chladni_remove(r.rt, 1), CHLADNI_OK);
-  EXPECT_EQ(chladni_post_shake(r.rt, 0, chladni_time(r.rt), 1.0), CHLADNI_INPUT_ERROR);
+  const double now = chladni_runtime_time(r.rt);
+  ASSERT_EQ(chladni_shaker_shake(r.rt, shakers[0], now, 1.0), CHLADNI_OK);
+  ASSERT_EQ(chladni_object_remove(r.rt, objects[0]), CHLADNI_OK);
+  ASSERT_EQ(chladni_object_remove(r.rt, objects[1]), CHLADNI_OK);
+  EXPECT_EQ(chladni_shaker_shake(r.rt, shakers[0], now, 1.0), CHLADNI_INPUT_ERROR);
   std::vector<float> tail(2 * 1024);
-  ASSERT_EQ(chladni_render(r.rt, tail.data(), 512), CHLADNI_OK);  // gains ramp to zero
-  ASSERT_EQ(chladni_render(r.rt, tail.data(), 1024), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, tail.data(), 512), CHLADNI_OK);  // gains ramp to zero
+  ASSERT_EQ(chladni_runtime_render(r.rt, tail.data(), 1024), CHLADNI_OK);
   EXPECT_EQ(test::max_abs(tail), 0.0);
 }
 
@@ -235,75 +239,76 @@ TEST(CApi, PlaysAnAnalyticBarAsTheSceneFormatDoes) {
   Runtime r;
   chladni_bar spec;
   chladni_bar_default(&spec);
-  chladni_bank* b = nullptr;
-  ASSERT_EQ(chladni_bank_bar(r.rt, &spec, &b), CHLADNI_OK) << chladni_last_error();
-  EXPECT_EQ(chladni_bank_mode_count(b), playable[0].modes.modes.size());
-  EXPECT_NEAR(chladni_bank_mass(b), 7850 * 0.3 * 0.03 * 0.01, 1e-9);
+  chladni_bank b = {0};
+  ASSERT_EQ(chladni_bank_from_bar(r.rt, &spec, &b), CHLADNI_OK) << chladni_last_error();
+  EXPECT_EQ(chladni_bank_mode_count(r.rt, b), playable[0].modes.modes.size());
+  EXPECT_NEAR(chladni_bank_mass(r.rt, b), 7850 * 0.3 * 0.03 * 0.01, 1e-9);
   const double identity[4] = {1, 0, 0, 0};
-  uint32_t id = 0;
-  ASSERT_EQ(chladni_spawn(r.rt, b, bar.position.data(), identity, 1.0, &id), CHLADNI_OK);
+  chladni_object id{0};
+  ASSERT_EQ(chladni_object_spawn(r.rt, b, bar.position.data(), identity, 1.0, &id), CHLADNI_OK);
   for (int k = 0; k < 2; ++k) {
     chladni_impact im{};
+    im.object = id;
     im.time = times[k];
     im.impulse = 0.002;
     im.direction[2] = -1;
     im.vertex = -1;
     im.point[0] = xs[k], im.point[1] = 0.015, im.point[2] = 0.01;
-    ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+    ASSERT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_OK);
   }
   std::vector<float> out(ref.samples.size());
-  ASSERT_EQ(chladni_render(r.rt, out.data(), uint32_t(ref.frames())), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, out.data(), uint32_t(ref.frames())), CHLADNI_OK);
   const double peak = test::max_abs(ref.samples);
   ASSERT_GT(peak, 1e-4);
   EXPECT_LT(test::max_diff(ref.samples, out), 1e-6 * peak);
   // Bad bars name the field.
   spec.thickness = INFINITY;
-  EXPECT_EQ(chladni_bank_bar(r.rt, &spec, &b), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_bank_from_bar(r.rt, &spec, &b), CHLADNI_INPUT_ERROR);
   EXPECT_NE(std::string(chladni_last_error()).find("finite and > 0"), std::string::npos);
   chladni_bar_default(&spec);
   spec.poisson_ratio = 0.7;
-  EXPECT_EQ(chladni_bank_bar(r.rt, &spec, &b), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_bank_from_bar(r.rt, &spec, &b), CHLADNI_INPUT_ERROR);
   EXPECT_NE(std::string(chladni_last_error()).find("poisson_ratio"), std::string::npos);
 }
 
 TEST(CApi, RefusesBadInputAndAFullQueue) {
   Runtime r(4);
-  chladni_bank* b = bank(r.rt, kBowl);
+  chladni_bank b = bank(r.rt, kBowl);
   const double origin[3] = {0, 1, 0}, identity[4] = {1, 0, 0, 0}, zero[4] = {0, 0, 0, 0};
-  uint32_t id = 0;
-  EXPECT_EQ(chladni_spawn(r.rt, b, origin, zero, 1.0, &id), CHLADNI_INPUT_ERROR);
+  chladni_object id{0};
+  EXPECT_EQ(chladni_object_spawn(r.rt, b, origin, zero, 1.0, &id), CHLADNI_INPUT_ERROR);
   EXPECT_NE(std::string(chladni_last_error()).find("orientation"), std::string::npos);
-  ASSERT_EQ(chladni_spawn(r.rt, b, origin, identity, 1.0, &id), CHLADNI_OK);
+  ASSERT_EQ(chladni_object_spawn(r.rt, b, origin, identity, 1.0, &id), CHLADNI_OK);
   chladni_impact im{};
   im.object = id;
   im.impulse = 0.01;
   im.direction[2] = -1;
   im.vertex = 3;  // inline modes have no surface points
-  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_INPUT_ERROR);
   EXPECT_NE(std::string(chladni_last_error()).find("vertex 3 is out of range"), std::string::npos);
   im.vertex = -1;
   im.contact_time = INFINITY;
-  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_INPUT_ERROR);
   im.contact_time = 0;
   // The queue holds 4 commands between renders; the fifth waits for a render.
-  for (int k = 0; k < 4; ++k) EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
-  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_QUEUE_FULL);
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_OK);
+  EXPECT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_QUEUE_FULL);
   std::vector<float> out(256 * 2);
-  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
-  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, out.data(), 256), CHLADNI_OK);
+  EXPECT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_OK);
   EXPECT_GT(test::max_abs(out), 0.0);
-  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, out.data(), 256), CHLADNI_OK);
   // A removed object fades out over the gain ramp (256 samples), without a step, then is
   // silent; it refuses commands at once.
-  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, out.data(), 256), CHLADNI_OK);
   const double ringing = test::max_abs(out);
-  ASSERT_EQ(chladni_remove(r.rt, id), CHLADNI_OK);
-  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  ASSERT_EQ(chladni_object_remove(r.rt, id), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, out.data(), 256), CHLADNI_OK);
   EXPECT_GT(test::max_abs(std::span(out).first(128)), 0.3 * ringing);
   EXPECT_LT(test::max_abs(std::span(out).last(16)), 0.1 * ringing);
-  ASSERT_EQ(chladni_render(r.rt, out.data(), 256), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, out.data(), 256), CHLADNI_OK);
   EXPECT_EQ(test::max_abs(out), 0.0);
-  EXPECT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_INPUT_ERROR);
   chladni_config c;
   chladni_config_default(&c);
   c.channels = 3;
@@ -333,34 +338,35 @@ TEST(CApi, PlaysASoundbankFromFileOrMemoryStruckAtAVertex) {
   const std::vector<uint8_t> bytes = serialize_soundbank(sb);
 
   Runtime r;
-  chladni_bank* from_file = nullptr;
-  chladni_bank* from_memory = nullptr;
+  chladni_bank from_file = {0};
+  chladni_bank from_memory = {0};
   ASSERT_EQ(chladni_bank_load_file(r.rt, path.c_str(), &from_file), CHLADNI_OK)
       << chladni_last_error();
   ASSERT_EQ(chladni_bank_load_memory(r.rt, bytes.data(), bytes.size(), &from_memory), CHLADNI_OK)
       << chladni_last_error();
-  EXPECT_EQ(chladni_bank_point_count(from_file), 4u);
-  EXPECT_EQ(chladni_bank_mode_count(from_memory), 2u);
+  EXPECT_EQ(chladni_bank_point_count(r.rt, from_file), 4u);
+  EXPECT_EQ(chladni_bank_mode_count(r.rt, from_memory), 2u);
   // The tetrahedron's volume (0.1^3 / 6) times steel's density.
-  EXPECT_NEAR(chladni_bank_mass(from_memory), 1e-3 / 6 * find_material("steel").density, 1e-6);
+  EXPECT_NEAR(chladni_bank_mass(r.rt, from_memory), 1e-3 / 6 * find_material("steel").density,
+              1e-6);
   double lo[3], hi[3];
-  ASSERT_EQ(chladni_bank_bounds(from_file, lo, hi), CHLADNI_OK);
+  ASSERT_EQ(chladni_bank_bounds(r.rt, from_file, lo, hi), CHLADNI_OK);
   for (int c = 0; c < 3; ++c) {
     EXPECT_NEAR(lo[c], 0.0, 1e-7);
     EXPECT_NEAR(hi[c], 0.1, 1e-7);
   }
   const double at[3] = {0, 0.5, 0}, identity[4] = {1, 0, 0, 0};
-  uint32_t id = 0;
-  ASSERT_EQ(chladni_spawn(r.rt, from_file, at, identity, 1.0, &id), CHLADNI_OK);
+  chladni_object id{0};
+  ASSERT_EQ(chladni_object_spawn(r.rt, from_file, at, identity, 1.0, &id), CHLADNI_OK);
   // Struck along x: only mode 0 (440 Hz) moves.
   chladni_impact im{};
   im.object = id;
   im.impulse = 0.01;
   im.direction[0] = 1;
   im.vertex = 1;
-  ASSERT_EQ(chladni_post_impact(r.rt, &im), CHLADNI_OK);
+  ASSERT_EQ(chladni_impact_post(r.rt, &im), CHLADNI_OK);
   std::vector<float> out(4800 * 2);
-  ASSERT_EQ(chladni_render(r.rt, out.data(), 4800), CHLADNI_OK);
+  ASSERT_EQ(chladni_runtime_render(r.rt, out.data(), 4800), CHLADNI_OK);
   std::vector<float> left(4800);
   for (int n = 0; n < 4800; ++n) left[n] = out[2 * n];
   EXPECT_GT(test::max_abs(left), 0.0);
@@ -370,7 +376,7 @@ TEST(CApi, PlaysASoundbankFromFileOrMemoryStruckAtAVertex) {
   // Damaged bytes are refused with the section named.
   std::vector<uint8_t> bad = bytes;
   bad.resize(bad.size() / 2);
-  chladni_bank* broken = nullptr;
+  chladni_bank broken = {0};
   EXPECT_EQ(chladni_bank_load_memory(r.rt, bad.data(), bad.size(), &broken), CHLADNI_INPUT_ERROR);
   EXPECT_NE(std::string(chladni_last_error()).find("memory"), std::string::npos)
       << chladni_last_error();

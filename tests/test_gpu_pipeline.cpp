@@ -106,29 +106,32 @@ TEST(GpuPipeline, CApiSoundsAsTheCpuBackendOneBlockLater) {
     EXPECT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();
     const double hz[] = {441, 1142, 2650, 5210}, decay[] = {2, 3, 5, 9},
                  amp[] = {0.02, 0.01, 0.004, 0.002};
-    chladni_bank* bank = nullptr;
+    chladni_bank bank = {0};
     EXPECT_EQ(chladni_bank_from_modes(rt, hz, decay, amp, 4, &bank), CHLADNI_OK);
     const double at[3] = {0.3, 1, 0}, identity[4] = {1, 0, 0, 0}, fwd[3] = {0, 1, 0},
                  up[3] = {0, 0, 1}, near[3] = {0.1, 0.5, 0};
-    uint32_t id = 0, shaker = 0;
-    EXPECT_EQ(chladni_spawn(rt, bank, at, identity, 1.0, &id), CHLADNI_OK);
-    const chladni_shaker_desc gravel{0, "gravel", 0, 1, 0};
+    chladni_object id{0};
+    chladni_shaker shaker{0};
+    EXPECT_EQ(chladni_object_spawn(rt, bank, at, identity, 1.0, &id), CHLADNI_OK);
+    const chladni_shaker_desc gravel{id, "gravel", 0, 1, 0};
     EXPECT_EQ(chladni_shaker_add(rt, &gravel, &shaker), CHLADNI_OK) << chladni_last_error();
     for (int k = 0; k < 6; ++k) {
       chladni_impact im{};
+      im.object = id;
       im.time = 0.013 + 0.061 * k;
       im.impulse = 0.01;
       im.direction[2] = -1;
       im.vertex = -1;
       im.contact_time = k % 2 ? 0.002 : 0.0;  // contact forces are added on the host
-      EXPECT_EQ(chladni_post_impact(rt, &im), CHLADNI_OK);
+      EXPECT_EQ(chladni_impact_post(rt, &im), CHLADNI_OK);
     }
-    EXPECT_EQ(chladni_post_shake(rt, shaker, 0.2, 0.6), CHLADNI_OK);
-    EXPECT_EQ(chladni_post_listener(rt, 0.25, near, fwd, up), CHLADNI_OK);
+    EXPECT_EQ(chladni_shaker_shake(rt, shaker, 0.2, 0.6), CHLADNI_OK);
+    EXPECT_EQ(chladni_listener_set(rt, 0.25, near, fwd, up), CHLADNI_OK);
     std::vector<float> out(2 * 48000 / 2);
     for (std::size_t n = 0; n < out.size() / 2; n += 480)
-      EXPECT_EQ(chladni_render(rt, out.data() + 2 * n, 480), CHLADNI_OK) << chladni_last_error();
-    *latency = chladni_latency(rt);
+      EXPECT_EQ(chladni_runtime_render(rt, out.data() + 2 * n, 480), CHLADNI_OK)
+          << chladni_last_error();
+    *latency = chladni_runtime_latency(rt);
     chladni_runtime_destroy(rt);
     return out;
   };

@@ -4,21 +4,24 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <new>
 #include <numbers>
 
+#include "capi_storm.hpp"
 #include "chladni/chladni.h"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
 #include "chladni/runtime/modal/synth.hpp"
 #include "chladni/runtime/phisem/shaker_bank.hpp"
 
 namespace {
-std::atomic<bool> g_count{false};
+std::atomic<bool> g_count{false};   // counts every thread's allocations
+thread_local bool t_count = false;  // counts this thread's
 std::atomic<long> g_allocs{0};
 void* counted(std::size_t n) {
-  if (g_count.load(std::memory_order_relaxed)) g_allocs.fetch_add(1);
+  if (g_count.load(std::memory_order_relaxed) || t_count) g_allocs.fetch_add(1);
   if (void* p = std::malloc(n ? n : 1)) return p;
   throw std::bad_alloc();
 }
@@ -122,47 +125,76 @@ TEST(CApi, PostingAndRenderingDoNotAllocate) {
     decay.push_back(3.0 + i % 7);
     amp.push_back(0.01);
   }
-  chladni_bank* bank = nullptr;
+  chladni_bank bank = {0};
   ASSERT_EQ(chladni_bank_from_modes(rt, hz.data(), decay.data(), amp.data(), hz.size(), &bank),
             CHLADNI_OK);
   const double identity[4] = {1, 0, 0, 0}, fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1};
+  chladni_object objects[4];
   for (int k = 0; k < 4; ++k) {
     const double at[3] = {k - 1.5, 2.0, 0.0};
-    uint32_t id = 0;
-    ASSERT_EQ(chladni_spawn(rt, bank, at, identity, 1.0, &id), CHLADNI_OK);
+    ASSERT_EQ(chladni_object_spawn(rt, bank, at, identity, 1.0, &objects[k]), CHLADNI_OK);
   }
-  uint32_t gravel = 0, maraca = 0;
-  const chladni_shaker_desc in_bowl{0, "gravel", 0, 1, 0}, at_bar{1, "maraca", 0, 0, 0};
+  chladni_shaker gravel{0}, maraca{0};
+  const chladni_shaker_desc in_bowl{objects[0], "gravel", 0, 1, 0},
+      at_bar{objects[1], "maraca", 0, 0, 0};
   ASSERT_EQ(chladni_shaker_add(rt, &in_bowl, &gravel), CHLADNI_OK);
   ASSERT_EQ(chladni_shaker_add(rt, &at_bar, &maraca), CHLADNI_OK);
   std::vector<float> out(256 * 2);
-  ASSERT_EQ(chladni_render(rt, out.data(), 256), CHLADNI_OK);  // warm-up
+  ASSERT_EQ(chladni_runtime_render(rt, out.data(), 256), CHLADNI_OK);  // warm-up
   g_allocs = 0;
   g_count = true;
   for (int b = 0; b < 200; ++b) {
-    const double t = chladni_time(rt);
+    const double t = chladni_runtime_time(rt);
     chladni_impact im{};
-    im.object = static_cast<uint32_t>(b % 3);  // object 3 is removed half-way
+    im.object = objects[b % 3];  // object 3 is removed half-way
     im.time = t + 0.001;
     im.impulse = 0.01;
     im.direction[2] = -1;
     im.vertex = -1;
     im.contact_time = b % 2 ? 0.001 : 0.0;
-    EXPECT_EQ(chladni_post_impact(rt, &im), CHLADNI_OK);
+    EXPECT_EQ(chladni_impact_post(rt, &im), CHLADNI_OK);
     const double pos[3] = {0.01 * b, 0, 0};
-    EXPECT_EQ(chladni_post_listener(rt, t + 0.002, pos, fwd, up), CHLADNI_OK);
+    EXPECT_EQ(chladni_listener_set(rt, t + 0.002, pos, fwd, up), CHLADNI_OK);
     if (b % 5 == 0) {
-      EXPECT_EQ(chladni_post_shake(rt, b % 10 ? gravel : maraca, t, 0.7), CHLADNI_OK);
+      EXPECT_EQ(chladni_shaker_shake(rt, b % 10 ? gravel : maraca, t, 0.7), CHLADNI_OK);
     }
     if (b == 100) {
-      EXPECT_EQ(chladni_remove(rt, 3), CHLADNI_OK);
+      EXPECT_EQ(chladni_object_remove(rt, objects[3]), CHLADNI_OK);
     }
-    EXPECT_EQ(chladni_render(rt, out.data(), 256), CHLADNI_OK);
+    EXPECT_EQ(chladni_runtime_render(rt, out.data(), 256), CHLADNI_OK);
   }
   g_count = false;
   EXPECT_EQ(g_allocs.load(), 0);
   float peak = 0;
   for (float x : out) peak = std::max(peak, std::abs(x));
   EXPECT_GT(peak, 0.0f);
+  chladni_runtime_destroy(rt);
+}
+
+TEST(CApi, RenderingDoesNotAllocateWhileObjectsSpawnAndGo) {
+  // The audio thread's allocations alone, while a control thread spawns and removes objects and
+  // loads and releases banks, and a game thread strikes and moves them.
+  chladni_runtime* rt = chladni::test::storm_runtime();
+  ASSERT_NE(rt, nullptr) << chladni_last_error();
+  std::vector<float> out(256 * 2);
+  ASSERT_EQ(chladni_runtime_render(rt, out.data(), 256), CHLADNI_OK);  // warm-up
+  chladni::test::CApiStorm storm(rt);
+  storm.start();
+  g_allocs = 0;
+  t_count = true;
+  float peak = 0;
+  const auto t0 = std::chrono::steady_clock::now();  // read before counting: it may not allocate
+  while (storm.spawned.load() < 300 &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(30)) {
+    if (chladni_runtime_render(rt, out.data(), 256) != CHLADNI_OK) break;
+    for (float x : out) peak = std::max(peak, std::abs(x));
+  }
+  t_count = false;
+  storm.stop();
+  EXPECT_EQ(g_allocs.load(), 0);
+  EXPECT_EQ(storm.unexpected, "");
+  EXPECT_GE(storm.spawned.load(), 300);
+  EXPECT_GT(peak, 0.0f);
+  storm.clear();
   chladni_runtime_destroy(rt);
 }

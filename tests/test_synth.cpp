@@ -18,7 +18,7 @@ using namespace chladni;
 using namespace chladni::runtime;
 
 namespace {
-constexpr double kFs = 48000;
+constexpr double kSynthRate = 48000;
 ModeSpec mode(double hz, double decay, float gain = 1) {
   return {2 * std::numbers::pi * hz, decay, gain};
 }
@@ -26,7 +26,7 @@ ModeSpec mode(double hz, double decay, float gain = 1) {
 
 TEST(Synth, RetiresAModeOnce100dBBelowItsPeak) {
   CpuFilterbank fb({.capacity = 256, .channels = 1, .threads = 1});
-  Synth synth(fb, {.sample_rate = kFs});
+  Synth synth(fb, {.sample_rate = kSynthRate});
   const ModeSpec m[] = {mode(300, 10.0)};
   const auto v = synth.start_voice(m);
   const std::complex<float> a[] = {{1.0f, 0.0f}};
@@ -34,7 +34,7 @@ TEST(Synth, RetiresAModeOnce100dBBelowItsPeak) {
   EXPECT_EQ(synth.active_modes(), 1u);
   // exp(-10 t) = 1e-5 at t = ln(1e5) / 10 = 1.151 s.
   std::vector<float> out(256);
-  const uint64_t retire = static_cast<uint64_t>(std::log(1e5) / 10.0 * kFs);
+  const uint64_t retire = static_cast<uint64_t>(std::log(1e5) / 10.0 * kSynthRate);
   while (synth.time() + 256 < retire) {
     synth.render(256, out.data());
     ASSERT_EQ(synth.active_modes(), 1u) << "retired early at sample " << synth.time();
@@ -65,17 +65,17 @@ TEST(Synth, LeasedSlotRangesShareAFilterbankWithoutChangingTheSound) {
     return out;
   };
   CpuFilterbank alone({.capacity = 64, .channels = 1, .threads = 1});
-  Synth first(alone, {.sample_rate = kFs});
+  Synth first(alone, {.sample_rate = kSynthRate});
   const auto reference = run(alone, first);
 
   CpuFilterbank shared({.capacity = 64, .channels = 1, .threads = 1});
-  ShakerBank shakers(shared, {.sample_rate = kFs, .slots = 24, .max_voices = 2});
+  ShakerBank shakers(shared, {.sample_rate = kSynthRate, .slots = 24, .max_voices = 2});
   EXPECT_EQ(shared.unleased(), 40u);
-  Synth second(shared, {.sample_rate = kFs, .max_modes = 32});
+  Synth second(shared, {.sample_rate = kSynthRate, .max_modes = 32});
   EXPECT_EQ(shared.unleased(), 8u);
   EXPECT_THROW(shared.lease(9), InputError);
   EXPECT_EQ(shared.lease(8).begin, 56u);
-  EXPECT_THROW(Synth(shared, {.sample_rate = kFs}), InputError);  // nothing left to lease
+  EXPECT_THROW(Synth(shared, {.sample_rate = kSynthRate}), InputError);  // nothing left to lease
   const auto out = run(shared, second);
   ASSERT_EQ(out.size(), reference.size());
   for (std::size_t i = 0; i < out.size(); ++i) ASSERT_EQ(out[i], reference[i]) << "sample " << i;
@@ -85,7 +85,7 @@ TEST(Synth, LeasedSlotRangesShareAFilterbankWithoutChangingTheSound) {
   EXPECT_GE(second.slot_of(v, 0), 24);
   EXPECT_LT(second.slot_of(v, 2), 24 + 32);
   // A shaker voice in its lease sounds alongside the synth (its slots are processed).
-  shakers.add_voice(instrument_voice(phisem_preset("maraca"), kFs));
+  shakers.add_voice(instrument_voice(phisem_preset("maraca"), kSynthRate));
   ASSERT_TRUE(shakers.shake(0, 1.0f, 0));
   std::vector<float> block(256);
   const DriveInput in = shakers.prepare(256);
@@ -102,7 +102,7 @@ TEST(Synth, ALeaseReturnsWithItsSlotsSilenced) {
   CpuFilterbank fb({.capacity = 64, .channels = 1, .threads = 1});
   std::vector<float> out(256);
   {
-    Synth first(fb, {.sample_rate = kFs});
+    Synth first(fb, {.sample_rate = kSynthRate});
     EXPECT_EQ(fb.unleased(), 0u);
     const ModeSpec m[] = {mode(440, 0.5)};
     const std::complex<float> a[] = {{1.0f, 0.0f}};
@@ -111,7 +111,7 @@ TEST(Synth, ALeaseReturnsWithItsSlotsSilenced) {
     ASSERT_GT(test::max_abs(out), 0.1);
   }
   EXPECT_EQ(fb.unleased(), 64u);
-  Synth second(fb, {.sample_rate = kFs});
+  Synth second(fb, {.sample_rate = kSynthRate});
   second.render(256, out.data());
   EXPECT_EQ(test::max_abs(out), 0.0);
   EXPECT_EQ(fb.state(0), std::complex<float>(0, 0));
@@ -119,7 +119,7 @@ TEST(Synth, ALeaseReturnsWithItsSlotsSilenced) {
 
 TEST(Synth, StealsTheLeastAudibleModesWhenTheBudgetIsFull) {
   CpuFilterbank fb({.capacity = 64, .channels = 1, .threads = 1});
-  Synth synth(fb, {.sample_rate = kFs, .max_modes = 8});
+  Synth synth(fb, {.sample_rate = kSynthRate, .max_modes = 8});
   std::vector<ModeSpec> a_modes, b_modes;
   std::vector<std::complex<float>> a_amp, b_amp;
   for (int i = 0; i < 8; ++i) {
@@ -146,7 +146,7 @@ TEST(Synth, StealsTheLeastAudibleModesWhenTheBudgetIsFull) {
 
 TEST(Synth, StopVoiceFreesItsSlotsAndDropsPendingKicks) {
   CpuFilterbank fb({.capacity = 64, .channels = 1, .threads = 1});
-  Synth synth(fb, {.sample_rate = kFs});
+  Synth synth(fb, {.sample_rate = kSynthRate});
   const ModeSpec m[] = {mode(440, 1.0), mode(880, 1.0)};
   const auto v = synth.start_voice(m);
   const std::complex<float> amp[] = {{1, 0}, {1, 0}};
@@ -162,7 +162,7 @@ TEST(Synth, StopVoiceFreesItsSlotsAndDropsPendingKicks) {
 
 TEST(Synth, RejectsNonFiniteInput) {
   CpuFilterbank fb({.capacity = 64, .channels = 1, .threads = 1});
-  Synth synth(fb, {.sample_rate = kFs});
+  Synth synth(fb, {.sample_rate = kSynthRate});
   const ModeSpec bad[] = {{NAN, 1.0, 1.0f}};
   EXPECT_THROW(synth.start_voice(bad), InputError);
   const ModeSpec m[] = {mode(440, 1.0)};
@@ -251,14 +251,14 @@ TEST(Render, SubSampleEventTimeShiftsPhaseExactly) {
   o.modes = {{1000.0, 1.0, 1.0}};
   s.objects = {o};
   ImpactEvent e;
-  e.time = 0.5 / kFs;
+  e.time = 0.5 / kSynthRate;
   e.impulse = 1.0;
   s.events = {e};
   CpuFilterbank fb({.capacity = 64, .channels = 1, .threads = 1});
   const AudioBuffer out = render_with(fb, s, 256);
   const double w = 2 * std::numbers::pi * 1000.0;
   for (std::size_t n = 1; n < out.frames(); ++n) {
-    const double t = n / kFs - e.time;
+    const double t = n / kSynthRate - e.time;
     EXPECT_NEAR(out.samples[n], std::exp(-t) * std::sin(w * t), 1e-4) << n;
   }
 }

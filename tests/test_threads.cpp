@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -13,6 +14,8 @@
 #include <thread>
 #include <vector>
 
+#include "../runtime/capi/src/handles.hpp"
+#include "capi_storm.hpp"
 #include "chladni/chladni.h"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
 #include "chladni/runtime/phisem/phisem.hpp"
@@ -35,6 +38,11 @@ double max_abs(const std::vector<float>& v) {
   return m;
 }
 
+// A fresh runtime's k-th object: place k, generation 1.
+uint64_t object_id(int k) {
+  return (uint64_t{1} << 32) | static_cast<uint64_t>(k);
+}
+
 chladni_runtime* make_runtime() {
   chladni_config c;
   chladni_config_default(&c);
@@ -47,18 +55,22 @@ chladni_runtime* make_runtime() {
     decay.push_back(4.0 + i % 5);
     amp.push_back(0.01);
   }
-  chladni_bank* bank = nullptr;
+  chladni_bank bank = {0};
   EXPECT_EQ(chladni_bank_from_modes(rt, hz.data(), decay.data(), amp.data(), hz.size(), &bank),
             CHLADNI_OK);
   const double identity[4] = {1, 0, 0, 0};
+  chladni_object first{0};
   for (int k = 0; k < kObjects; ++k) {
     const double at[3] = {k - 1.5, 2.0, 0.0};
-    uint32_t id = 0;
-    EXPECT_EQ(chladni_spawn(rt, bank, at, identity, 1.0, &id), CHLADNI_OK);
+    chladni_object id{0};
+    EXPECT_EQ(chladni_object_spawn(rt, bank, at, identity, 1.0, &id), CHLADNI_OK);
+    EXPECT_EQ(id.id, object_id(k));  // the k-th place, first generation, in every runtime
+    if (k == 0) first = id;
   }
-  const chladni_shaker_desc gravel{0, "gravel", 0, 1, 0};
-  uint32_t shaker = 0;
+  const chladni_shaker_desc gravel{first, "gravel", 0, 1, 0};
+  chladni_shaker shaker{0};
   EXPECT_EQ(chladni_shaker_add(rt, &gravel, &shaker), CHLADNI_OK) << chladni_last_error();
+  EXPECT_EQ(shaker.id, 1u);
   return rt;
 }
 
@@ -67,7 +79,8 @@ chladni_runtime* make_runtime() {
 void post(chladni_runtime* rt, int k) {
   const double t = kFirst + 0.001 * k;
   const double identity[4] = {1, 0, 0, 0}, fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1};
-  const uint32_t object = static_cast<uint32_t>(k % kObjects);
+  const chladni_object object{object_id(k % kObjects)};
+  const double x = k % kObjects - 1.5;
   chladni_status s = CHLADNI_QUEUE_FULL;
   while (s == CHLADNI_QUEUE_FULL) {
     switch (k % 4) {
@@ -79,21 +92,21 @@ void post(chladni_runtime* rt, int k) {
         im.direction[2] = -1;
         im.vertex = -1;
         im.contact_time = k % 8 ? 0.0 : 0.0007;
-        s = chladni_post_impact(rt, &im);
+        s = chladni_impact_post(rt, &im);
         break;
       }
       case 1: {
-        const double at[3] = {object - 1.5, 2.0 + 0.001 * k, 0.0};
-        s = chladni_post_move(rt, object, t, at, identity);
+        const double at[3] = {x, 2.0 + 0.001 * k, 0.0};
+        s = chladni_object_move(rt, object, t, at, identity);
         break;
       }
       case 2: {
         const double pos[3] = {0.0005 * k, 0, 0};
-        s = chladni_post_listener(rt, t, pos, fwd, up);
+        s = chladni_listener_set(rt, t, pos, fwd, up);
         break;
       }
       default:
-        s = chladni_post_shake(rt, 0, t, 0.3);
+        s = chladni_shaker_shake(rt, chladni_shaker{1}, t, 0.3);
     }
     if (s == CHLADNI_QUEUE_FULL) std::this_thread::yield();
   }
@@ -108,7 +121,7 @@ TEST(Threads, GameThreadPostsWhileTheAudioThreadRenders) {
   for (int k = 0; k < kCommands; ++k) post(ref_rt, k);
   std::vector<float> ref(2 * kBlock * kBlocks);
   for (int b = 0; b < kBlocks; ++b)
-    ASSERT_EQ(chladni_render(ref_rt, ref.data() + 2 * kBlock * b, kBlock), CHLADNI_OK);
+    ASSERT_EQ(chladni_runtime_render(ref_rt, ref.data() + 2 * kBlock * b, kBlock), CHLADNI_OK);
   chladni_runtime_destroy(ref_rt);
 
   // The same commands from a game thread while the audio thread renders the first second; the
@@ -120,7 +133,8 @@ TEST(Threads, GameThreadPostsWhileTheAudioThreadRenders) {
   std::thread game([&] {
     for (int k = 0; k < kCommands; ++k) {
       post(rt, k);
-      seen.store(std::max(seen.load(), chladni_time(rt)));  // the clock, read across threads
+      seen.store(
+          std::max(seen.load(), chladni_runtime_time(rt)));  // the clock, read across threads
     }
     posted.store(true, std::memory_order_release);
   });
@@ -129,7 +143,7 @@ TEST(Threads, GameThreadPostsWhileTheAudioThreadRenders) {
   for (int b = 0; b < kBlocks; ++b) {
     if (b == before)
       while (!posted.load(std::memory_order_acquire)) std::this_thread::yield();
-    ASSERT_EQ(chladni_render(rt, out.data() + 2 * kBlock * b, kBlock), CHLADNI_OK)
+    ASSERT_EQ(chladni_runtime_render(rt, out.data() + 2 * kBlock * b, kBlock), CHLADNI_OK)
         << chladni_last_error();
   }
   game.join();
@@ -193,4 +207,44 @@ TEST(Threads, ShakerExcitationOnWorkersGivesTheSamplesOfOneThread) {
   const auto one = run(1), two = run(2);
   ASSERT_GT(max_abs(one), 0.0);
   for (std::size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one[i], two[i]) << "sample " << i;
+}
+
+TEST(Threads, ObjectsSpawnAndGoWhileTheAudioThreadRenders) {
+  // A control thread spawns and removes about a thousand objects a second, loading banks and
+  // releasing them while their objects still play; a game thread strikes and moves the live
+  // ones; this thread renders. Nothing waits on anything, and at the end every place and bank
+  // has been given back.
+  chladni_runtime* rt = test::storm_runtime();
+  ASSERT_NE(rt, nullptr) << chladni_last_error();
+  test::CApiStorm storm(rt);
+  storm.start();
+  std::vector<float> out(2 * kBlock);
+  double peak = 0;
+  bool finite = true;
+  const auto t0 = std::chrono::steady_clock::now();
+  while (storm.spawned.load() < 1000 &&
+         std::chrono::steady_clock::now() - t0 < std::chrono::seconds(60)) {
+    ASSERT_EQ(chladni_runtime_render(rt, out.data(), kBlock), CHLADNI_OK) << chladni_last_error();
+    for (float x : out) finite = finite && std::isfinite(x);
+    peak = std::max(peak, max_abs(out));
+  }
+  storm.stop();
+  EXPECT_EQ(storm.unexpected, "");
+  EXPECT_FALSE(storm.game_unexpected.load());
+  EXPECT_GE(storm.spawned.load(), 1000);
+  EXPECT_GE(storm.removed.load(), 900);
+  EXPECT_GE(storm.released.load(), 19);
+  EXPECT_GT(storm.impacts.load(), 100);
+  EXPECT_GT(storm.moves.load(), 100);
+  EXPECT_TRUE(finite);
+  EXPECT_GT(peak, 0.0);
+  // Removed, everything fades out within the gain ramp and is then silent.
+  storm.clear();
+  for (int b = 0; b < 3; ++b) ASSERT_EQ(chladni_runtime_render(rt, out.data(), kBlock), CHLADNI_OK);
+  EXPECT_EQ(max_abs(out), 0.0);
+  rt->reclaim();  // this thread is the control thread now
+  EXPECT_TRUE(rt->banks.empty());
+  EXPECT_EQ(rt->free_places.size(), 64u);
+  EXPECT_EQ(rt->lost_returns, 0u);
+  chladni_runtime_destroy(rt);
 }

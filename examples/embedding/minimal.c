@@ -18,7 +18,7 @@ int main(int argc, char** argv) {
   chladni_runtime* rt = NULL;
   if (check(chladni_runtime_create(&config, &rt), "create")) return 1;
 
-  chladni_bank* bank = NULL;
+  chladni_bank bank = {0};
   if (argc > 1) {
     if (check(chladni_bank_load_file(rt, argv[1], &bank), "load")) return 1;
   } else {
@@ -26,24 +26,24 @@ int main(int argc, char** argv) {
     if (check(chladni_bank_from_modes(rt, hz, decay, pa, 2, &bank), "modes")) return 1;
   }
   const double position[3] = {0.3, 1.0, 0.0}, identity[4] = {1, 0, 0, 0};
-  uint32_t bowl = 0;
-  if (check(chladni_spawn(rt, bank, position, identity, 1.0, &bowl), "spawn")) return 1;
+  chladni_object bowl = {0};
+  if (check(chladni_object_spawn(rt, bank, position, identity, 1.0, &bowl), "spawn")) return 1;
 
   /* Game thread: strike it 10 ms from now with a 0.8 ms contact. */
   chladni_impact hit = {0};
   hit.object = bowl;
-  hit.time = chladni_time(rt) + 0.01;
+  hit.time = chladni_runtime_time(rt) + 0.01;
   hit.impulse = 0.01;
   hit.direction[0] = -1.0;
   hit.vertex = -1; /* the surface point nearest hit.point */
   hit.contact_time = 0.0008;
-  if (check(chladni_post_impact(rt, &hit), "impact")) return 1;
+  if (check(chladni_impact_post(rt, &hit), "impact")) return 1;
 
   /* Audio thread: one second in the engine's buffer size. */
   float buffer[480 * 2];
   double peak = 0.0;
   for (int b = 0; b < 100; ++b) {
-    if (check(chladni_render(rt, buffer, 480), "render")) return 1;
+    if (check(chladni_runtime_render(rt, buffer, 480), "render")) return 1;
     for (int n = 0; n < 480 * 2; ++n) peak = fmax(peak, fabs(buffer[n]));
   }
   printf("%s: 1 s rendered, peak %.3g Pa\n", chladni_runtime_backend(rt), peak);

@@ -36,22 +36,22 @@ void check(chladni_status s, const char* what) {
 }
 
 struct Body {
-  uint32_t object = 0;
-  uint32_t scrape = 0;  // its shaker: grains on its surface
-  double slip = 0;      // this step's fastest sliding contact (m/s)
-  btVector3 centre;     // the box's centre in the bank's frame: the body's origin
+  chladni_object object{0};
+  chladni_shaker scrape{0};  // its shaker: grains on its surface
+  double slip = 0;           // this step's fastest sliding contact (m/s)
+  btVector3 centre;          // the box's centre in the bank's frame: the body's origin
   std::unique_ptr<btCollisionShape> shape;
   std::unique_ptr<btDefaultMotionState> motion;
   std::unique_ptr<btRigidBody> rigid;
 };
 
 // A sounding body: a box the size of its bank's surface (or `half` for inline modes).
-Body make_body(chladni_runtime* rt, chladni_bank* bank, btVector3 half, const btVector3& at,
+Body make_body(chladni_runtime* rt, chladni_bank bank, btVector3 half, const btVector3& at,
                const btQuaternion& q) {
   Body b;
   double lo[3], hi[3];
   b.centre = btVector3(0, 0, 0);
-  if (chladni_bank_bounds(bank, lo, hi) == CHLADNI_OK) {
+  if (chladni_bank_bounds(rt, bank, lo, hi) == CHLADNI_OK) {
     half = btVector3(btScalar(hi[0] - lo[0]), btScalar(hi[1] - lo[1]), btScalar(hi[2] - lo[2])) / 2;
     b.centre =
         btVector3(btScalar(hi[0] + lo[0]), btScalar(hi[1] + lo[1]), btScalar(hi[2] + lo[2])) / 2;
@@ -59,7 +59,7 @@ Body make_body(chladni_runtime* rt, chladni_bank* bank, btVector3 half, const bt
   for (int c = 0; c < 3; ++c) half[c] = std::max(half[c], btScalar(0.003));
   b.shape = std::make_unique<btBoxShape>(half);
   // The solid's own mass where the bank knows it (a bowl weighs far less than its box of metal).
-  const double solid = chladni_bank_mass(bank);
+  const double solid = chladni_bank_mass(rt, bank);
   const btScalar mass = btScalar(solid > 0 ? solid : 7800.0 * 8 * half.x() * half.y() * half.z());
   btVector3 inertia;
   b.shape->calculateLocalInertia(mass, inertia);
@@ -69,7 +69,7 @@ Body make_body(chladni_runtime* rt, chladni_bank* bank, btVector3 half, const bt
   info.m_friction = 0.5f;
   b.rigid = std::make_unique<btRigidBody>(info);
   const double pos[3] = {at.x(), at.y(), at.z()}, ori[4] = {q.w(), q.x(), q.y(), q.z()};
-  check(chladni_spawn(rt, bank, pos, ori, 1.0, &b.object), "spawn");
+  check(chladni_object_spawn(rt, bank, pos, ori, 1.0, &b.object), "spawn");
   chladni_shaker_desc grains{};
   grains.object = b.object;
   grains.instrument = "sandpaper";
@@ -86,7 +86,7 @@ void post_pose(chladni_runtime* rt, const Body& b, double time) {
   const btVector3 origin = t.getOrigin() - t.getBasis() * b.centre;
   const btQuaternion q = t.getRotation();
   const double pos[3] = {origin.x(), origin.y(), origin.z()}, ori[4] = {q.w(), q.x(), q.y(), q.z()};
-  check(chladni_post_move(rt, b.object, time, pos, ori), "move");
+  check(chladni_object_move(rt, b.object, time, pos, ori), "move");
 }
 
 // Speed of `o`'s surface at world point `p`.
@@ -163,10 +163,10 @@ struct World {
 // bodies stacked loosely above one another, tilted, so they hit the floor and each other.
 std::vector<Body> make_bodies(chladni_runtime* rt, const std::vector<std::string>& banks,
                               World& w) {
-  std::vector<chladni_bank*> sounding;
+  std::vector<chladni_bank> sounding;
   std::vector<btVector3> halves;
   for (const std::string& path : banks) {
-    chladni_bank* b = nullptr;
+    chladni_bank b = {0};
     check(chladni_bank_load_file(rt, path.c_str(), &b), "load");
     sounding.push_back(b);
     halves.emplace_back(0.05f, 0.05f, 0.05f);
@@ -176,7 +176,7 @@ std::vector<Body> make_bodies(chladni_runtime* rt, const std::vector<std::string
     const double block[3][3] = {{1430, 2980, 5110}, {12, 18, 25}, {1.5, 0.8, 0.4}};
     const double rod[3][3] = {{523, 1441, 2825}, {3, 5, 8}, {2.5, 1.4, 0.7}};
     for (const auto* m : {tile, block, rod}) {
-      chladni_bank* b = nullptr;
+      chladni_bank b = {0};
       check(chladni_bank_from_modes(rt, m[0], m[1], m[2], 3, &b), "modes");
       sounding.push_back(b);
     }
@@ -227,11 +227,12 @@ int post_impacts(chladni_runtime* rt, const btPersistentManifold* man, const btM
     im.point[0] = local.x(), im.point[1] = local.y(), im.point[2] = local.z();
     im.vertex = -1;
     im.contact_time = 0.0005;
-    check(chladni_post_impact(rt, &im), "impact");
+    check(chladni_impact_post(rt, &im), "impact");
     ++posted;
-    std::fprintf(log, "%llu,%.6f,impact,%u,%.6g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
-                 static_cast<unsigned long long>(step), t, it->object, im.impulse, local.x(),
-                 local.y(), local.z(), dir.x(), dir.y(), dir.z());
+    std::fprintf(log, "%llu,%.6f,impact,%zu,%.6g,%.4f,%.4f,%.4f,%.4f,%.4f,%.4f\n",
+                 static_cast<unsigned long long>(step), t,
+                 static_cast<std::size_t>(it - bodies.begin()), im.impulse, local.x(), local.y(),
+                 local.z(), dir.x(), dir.y(), dir.z());
   }
   return posted;
 }
@@ -250,12 +251,13 @@ bool post_contacts(chladni_runtime* rt, World& w, std::vector<Body>& bodies, boo
         impact |= post_impacts(rt, man, pt, bodies, t, step, log) > 0;
     }
   }
-  for (Body& b : bodies) {
+  for (std::size_t k = 0; k < bodies.size(); ++k) {
+    Body& b = bodies[k];
     if (scrape && b.slip > kMinSlip) {
       const double energy = std::min(1.0, b.slip / kFullSlip);
-      check(chladni_post_shake(rt, b.scrape, t, energy), "scrape");
-      std::fprintf(log, "%llu,%.6f,scrape,%u,%.4f,%.4f,,,,,\n",
-                   static_cast<unsigned long long>(step), t, b.object, energy, b.slip);
+      check(chladni_shaker_shake(rt, b.scrape, t, energy), "scrape");
+      std::fprintf(log, "%llu,%.6f,scrape,%zu,%.4f,%.4f,,,,,\n",
+                   static_cast<unsigned long long>(step), t, k, energy, b.slip);
     }
     b.slip = 0;
   }
@@ -272,7 +274,7 @@ int main(int argc, char** argv) try {
   chladni_runtime* rt = nullptr;
   check(chladni_runtime_create(&config, &rt), "create");
   const double fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1}, ear[3] = {0, -1.2, 0.3};
-  check(chladni_post_listener(rt, 0, ear, fwd, up), "listener");
+  check(chladni_listener_set(rt, 0, ear, fwd, up), "listener");
   World w;
   std::vector<Body> bodies = make_bodies(rt, opt.banks, w);
 
@@ -285,11 +287,11 @@ int main(int argc, char** argv) try {
   double first_impact = -1;
   const uint64_t steps = static_cast<uint64_t>(opt.seconds / kStep);
   for (uint64_t s = 0; s < steps; ++s) {
-    const double t = chladni_time(rt);  // the audio clock is the simulation's
+    const double t = chladni_runtime_time(rt);  // the audio clock is the simulation's
     w.world.stepSimulation(btScalar(kStep), 0);
     for (const Body& b : bodies) post_pose(rt, b, t);
     if (post_contacts(rt, w, bodies, opt.scrape, t, s, log) && first_impact < 0) first_impact = t;
-    check(chladni_render(rt, block.data(), kFramesPerStep), "render");
+    check(chladni_runtime_render(rt, block.data(), kFramesPerStep), "render");
     audio.insert(audio.end(), block.begin(), block.end());
   }
   std::fclose(log);

@@ -1,9 +1,17 @@
 #pragma once
 // The C API's handles and helpers (internal).
+//
+// Three threads meet here. The control thread owns banks and the object places' bookkeeping; it
+// hands prepared objects and removals to the audio thread through `changes`, and takes back what
+// the audio thread is done with (retired places, the storage an install swapped out) through
+// `returns`: every allocation and free stays off the audio thread. The game thread posts commands
+// through `queue`, checking handles against the places' atomic ids; the audio thread checks them
+// again against what it has installed, so a command for an object removed meanwhile is dropped.
 #include <atomic>
 #include <cmath>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "chladni/chladni.h"
@@ -20,11 +28,51 @@ enum class Kind : uint8_t { Impact, Move, Listener, Shake };
 // One posted command, plain data (copied through the queue).
 struct Command {
   Kind kind;
-  uint32_t object;  // a shaker's index for Shake
+  uint64_t object;  // the object's handle id (a shaker's object for Shake)
+  uint32_t shaker;
   double time;
   double impulse, contact;  // impulse: a shake's energy
   int64_t vertex;
   double a[3], b[3], c[3], q[4];  // direction/point/-, position/forward/up, orientation
+};
+
+// Control -> audio: an object to place, or one to remove.
+struct Change {
+  enum class Kind : uint8_t { Spawn, Remove } kind;
+  uint32_t place;
+  uint64_t id;
+  runtime::ScenePlayer::PreparedObject* prepared;  // Spawn
+};
+
+// Audio -> control: a place whose object has faded out, or storage to free.
+struct Return {
+  enum class Kind : uint8_t { Retired, Garbage, Refused } kind;
+  uint32_t place;
+  runtime::ScenePlayer::PreparedObject* prepared;  // Garbage, Refused
+};
+
+struct Bank {
+  std::unique_ptr<ModalModel> model;  // soundbanks
+  std::vector<InlineMode> inline_modes;
+  runtime::ObjectModes modes;
+  std::unique_ptr<runtime::TransferTable> table;  // the model's transfer, for its objects
+  double mass = 0;       // kg: the surface's volume times the density (0 for inline modes)
+  uint32_t objects = 0;  // objects placed and not yet retired
+  bool released = false;
+};
+
+// An object place. `id` and `points` are read by the game thread; the rest is the control
+// thread's.
+struct Place {
+  std::atomic<uint64_t> id{0};  // the live object's handle id (0: none)
+  std::atomic<uint64_t> points{0};
+  Bank* bank = nullptr;  // while spawned and not yet retired
+  uint32_t generation = 0;
+};
+
+// A shaker, read by the game thread.
+struct ShakerPlace {
+  std::atomic<uint64_t> object{0};
 };
 
 /// Records `message` as this thread's last error; returns `status`.
@@ -51,29 +99,53 @@ void need_vector(const double* v, const char* what, bool nonzero = true);
 /// The unit quaternion of `q` (w, x, y, z); InputError when not finite or zero.
 Quat unit_quaternion(const double* q);
 
-}  // namespace chladni::capi
+/// A handle id: the place in the low 32 bits, its generation (from 1) in the high ones.
+inline uint64_t handle_id(uint32_t place, uint32_t generation) {
+  return (uint64_t{generation} << 32) | place;
+}
+inline uint32_t place_of(uint64_t id) {
+  return static_cast<uint32_t>(id & 0xffffffffu);
+}
 
-struct chladni_bank {
-  std::unique_ptr<chladni::ModalModel> model;  // soundbanks
-  std::vector<chladni::InlineMode> inline_modes;
-  chladni::runtime::ObjectModes modes;
-  double mass = 0;  // kg: the surface's volume times the density (0 for inline modes)
-};
+}  // namespace chladni::capi
 
 struct chladni_runtime {
   explicit chladni_runtime(const chladni_config& c);
+  ~chladni_runtime();
+  // Control thread.
+  void reclaim();
+  chladni::capi::Bank& bank(chladni_bank handle) const;
+  void check_time(double time) const;
+  // Audio thread.
   void drain();
+  void take_changes();
   void apply_due(uint64_t t, uint32_t frames);
   uint32_t until_next_pose(uint32_t frames) const;
   uint64_t sample_of(const chladni::capi::Command& c) const;
+  bool installed(uint64_t object) const {
+    const uint32_t k = chladni::capi::place_of(object);
+    return k < installed_ids.size() && installed_ids[k] == object;
+  }
 
   chladni_config config;
   std::unique_ptr<chladni::runtime::Filterbank> fb;
   std::string name;
   std::unique_ptr<chladni::runtime::ScenePlayer> player;
-  std::vector<std::unique_ptr<chladni_bank>> banks;
+  // Control thread.
+  std::unordered_map<uint64_t, std::unique_ptr<chladni::capi::Bank>> banks;
+  uint64_t next_bank = 1;
+  std::vector<uint32_t> free_places;
+  // Shared.
+  std::unique_ptr<chladni::capi::Place[]> places;
+  std::unique_ptr<chladni::capi::ShakerPlace[]> shakers;
+  std::atomic<uint32_t> shaker_count{0};
   chladni::runtime::SpscQueue<chladni::capi::Command> queue;
+  chladni::runtime::SpscQueue<chladni::capi::Change> changes;
+  chladni::runtime::SpscQueue<chladni::capi::Return> returns;
+  // Audio thread.
+  std::vector<uint64_t> installed_ids;          // per place: the object installed there
   std::vector<chladni::capi::Command> pending;  // drained commands, by time; capacity fixed
+  uint64_t lost_returns = 0;                    // returns dropped on a full queue (a bug)
   uint64_t now = 0;                             // samples rendered (audio thread)
-  std::atomic<uint64_t> clock{0};  // `now`, published for chladni_time on other threads
+  std::atomic<uint64_t> clock{0};  // `now`, published for chladni_runtime_time on other threads
 };

@@ -1,9 +1,8 @@
-// Banks, objects and the command queue's producer side.
+// Objects and shakers (control thread), and the command queue's producer side (game thread).
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 
-#include "chladni/core/soundbank.hpp"
 #include "chladni/runtime/scene/scene_objects.hpp"
 #include "chladni/runtime/scene/scene_shakers.hpp"
 #include "handles.hpp"
@@ -36,39 +35,13 @@ Quat unit_quaternion(const double* q) {
 
 namespace {
 
-chladni_bank* keep(chladni_runtime* rt, std::unique_ptr<chladni_bank> bank) {
-  rt->banks.push_back(std::move(bank));
-  return rt->banks.back().get();
-}
-
-// Volume enclosed by the bank's surface (divergence theorem over its triangles) times density.
-double solid_mass(const Soundbank& bank) {
-  double six_v = 0;
-  for (const auto& t : bank.triangles) {
-    const auto& a = bank.vertices[t[0]];
-    const auto& b = bank.vertices[t[1]];
-    const auto& c = bank.vertices[t[2]];
-    six_v += double(a[0]) * (double(b[1]) * c[2] - double(b[2]) * c[1]) -
-             double(a[1]) * (double(b[0]) * c[2] - double(b[2]) * c[0]) +
-             double(a[2]) * (double(b[0]) * c[1] - double(b[1]) * c[0]);
-  }
-  return std::abs(six_v) / 6 * bank.material.density;
-}
-
-chladni_bank* bank_of(chladni_runtime* rt, Soundbank&& bank, const std::string& origin) {
-  auto b = std::make_unique<chladni_bank>();
-  b->mass = solid_mass(bank);
-  b->model =
-      std::make_unique<ModalModel>(playable_model(bank, origin, rt->config.sample_rate, origin));
-  b->modes = object_modes(*b->model);
-  return keep(rt, std::move(b));
-}
-
-// Validates a command's object and time (producer side).
-void check_target(const chladni_runtime* rt, uint32_t object, double time) {
-  if (object >= rt->player->object_count() || !rt->player->active(object))
-    throw InputError("no object " + std::to_string(object));
-  if (!std::isfinite(time)) throw InputError("time must be finite");
+// The place of a live object handle, for the game thread.
+uint32_t live(const chladni_runtime* rt, chladni_object object) {
+  const uint32_t k = capi::place_of(object.id);
+  if (object.id == 0 || k >= rt->config.max_objects ||
+      rt->places[k].id.load(std::memory_order_acquire) != object.id)
+    throw InputError("no object " + std::to_string(object.id) + " (never spawned, or removed)");
+  return k;
 }
 
 chladni_status post(chladni_runtime* rt, const Command& c) {
@@ -78,162 +51,103 @@ chladni_status post(chladni_runtime* rt, const Command& c) {
 
 }  // namespace
 
+// Takes back what the audio thread is done with: retired places (their bank loses an object,
+// and is freed if released and now unused) and the storage installs swapped out.
+void chladni_runtime::reclaim() {
+  using capi::Return;
+  auto vacate = [&](uint32_t k) {
+    capi::Place& p = places[k];
+    uint64_t expected = capi::handle_id(k, p.generation);
+    p.id.compare_exchange_strong(expected, 0);  // a refused spawn was never removed
+    if (p.bank && --p.bank->objects == 0 && p.bank->released) {
+      for (auto it = banks.begin(); it != banks.end(); ++it)
+        if (it->second.get() == p.bank) {
+          banks.erase(it);
+          break;
+        }
+    }
+    p.bank = nullptr;
+    free_places.push_back(k);
+  };
+  while (const Return* r = returns.front()) {
+    const Return ret = *r;
+    returns.pop();
+    if (ret.kind == Return::Kind::Retired) vacate(ret.place);
+    if (ret.kind == Return::Kind::Refused) vacate(ret.place);
+    delete ret.prepared;
+  }
+}
+
+void chladni_runtime::check_time(double time) const {
+  if (!std::isfinite(time)) throw InputError("time must be finite");
+  const double now =
+      static_cast<double>(clock.load(std::memory_order_acquire)) / config.sample_rate;
+  if (time > now + config.horizon)
+    throw InputError("time " + std::to_string(time) + " s is more than horizon (" +
+                     std::to_string(config.horizon) + " s) ahead of the clock (" +
+                     std::to_string(now) + " s)");
+}
+
 extern "C" {
 
-chladni_status chladni_bank_load_file(chladni_runtime* rt, const char* path, chladni_bank** out) {
-  return capi::guarded("chladni_bank_load_file", [&] {
-    if (!rt || !path || !out) throw InputError("runtime, path and out must not be null");
-    *out = bank_of(rt, read_soundbank(path), path);
-    return CHLADNI_OK;
-  });
-}
-
-chladni_status chladni_bank_load_memory(chladni_runtime* rt, const void* bytes, size_t size,
-                                        chladni_bank** out) {
-  return capi::guarded("chladni_bank_load_memory", [&] {
-    if (!rt || (!bytes && size) || !out)
-      throw InputError("runtime, bytes and out must not be null");
-    const auto* p = static_cast<const uint8_t*>(bytes);
-    *out = bank_of(rt, parse_soundbank(std::vector<uint8_t>(p, p + size), "memory"), "memory");
-    return CHLADNI_OK;
-  });
-}
-
-chladni_status chladni_bank_from_modes(chladni_runtime* rt, const double* frequency_hz,
-                                       const double* decay, const double* amplitude, size_t count,
-                                       chladni_bank** out) {
-  return capi::guarded("chladni_bank_from_modes", [&] {
-    if (!rt || !out || (count && (!frequency_hz || !decay || !amplitude)))
-      throw InputError("runtime, arrays and out must not be null");
-    if (count == 0) throw InputError("a bank needs at least one mode");
-    auto b = std::make_unique<chladni_bank>();
-    for (size_t i = 0; i < count; ++i) {
-      const std::string at = "mode " + std::to_string(i);
-      if (!(frequency_hz[i] > 0 && frequency_hz[i] < rt->config.sample_rate / 2))
-        throw InputError(at + ": frequency must be in (0, Nyquist)");
-      if (!(decay[i] >= 0 && std::isfinite(decay[i])))
-        throw InputError(at + ": decay must be finite and >= 0");
-      if (!std::isfinite(amplitude[i])) throw InputError(at + ": amplitude must be finite");
-      b->inline_modes.push_back({frequency_hz[i], decay[i], amplitude[i]});
-    }
-    b->modes = object_modes(b->inline_modes);
-    *out = keep(rt, std::move(b));
-    return CHLADNI_OK;
-  });
-}
-
-void chladni_bar_default(chladni_bar* bar) {
-  if (!bar) return;
-  const BarSpec d;
-  *bar = chladni_bar{d.length,
-                     d.width,
-                     d.thickness,
-                     d.youngs_modulus,
-                     d.poisson_ratio,
-                     d.density,
-                     {d.damping.alpha[0], d.damping.alpha[1]},
-                     d.max_frequency};
-}
-
-chladni_status chladni_bank_bar(chladni_runtime* rt, const chladni_bar* bar, chladni_bank** out) {
-  return capi::guarded("chladni_bank_bar", [&] {
-    if (!rt || !bar || !out) throw InputError("runtime, bar and out must not be null");
-    for (double v : {bar->length, bar->width, bar->thickness, bar->youngs_modulus, bar->density,
-                     bar->max_frequency})
-      if (!(v > 0 && std::isfinite(v)))
-        throw InputError(
-            "bar: dimensions, Young's modulus, density and max_frequency must be "
-            "finite and > 0");
-    if (!(bar->poisson_ratio > -1 && bar->poisson_ratio < 0.5))
-      throw InputError("bar: poisson_ratio must be in (-1, 0.5)");
-    if (!(bar->rayleigh[0] >= 0 && bar->rayleigh[1] >= 0 && std::isfinite(bar->rayleigh[0]) &&
-          std::isfinite(bar->rayleigh[1])))
-      throw InputError("bar: the Rayleigh coefficients must be finite and >= 0");
-    SceneObject obj;
-    obj.name = "bar";
-    obj.json_path = "bar";
-    obj.source = SceneObject::Source::Bar;
-    obj.bar = {bar->length,
-               bar->width,
-               bar->thickness,
-               bar->youngs_modulus,
-               bar->poisson_ratio,
-               bar->density,
-               DampingModel{DampingModel::Kind::Rayleigh, {bar->rayleigh[0], bar->rayleigh[1]}},
-               bar->max_frequency};
-    PlayableObject p = resolve_object(obj, rt->config.sample_rate);
-    auto b = std::make_unique<chladni_bank>();
-    b->mass = bar->density * bar->length * bar->width * bar->thickness;
-    b->model = std::move(p.model);
-    b->modes = object_modes(*b->model);
-    *out = keep(rt, std::move(b));
-    return CHLADNI_OK;
-  });
-}
-
-size_t chladni_bank_mode_count(const chladni_bank* bank) {
-  return bank ? bank->modes.modes.size() : 0;
-}
-
-size_t chladni_bank_point_count(const chladni_bank* bank) {
-  return bank && bank->model ? bank->model->points.size() : 0;
-}
-
-chladni_status chladni_bank_bounds(const chladni_bank* bank, double lo[3], double hi[3]) {
-  return capi::guarded("chladni_bank_bounds", [&] {
-    if (!bank || !lo || !hi) throw InputError("bank, min and max must not be null");
-    if (!bank->model || bank->model->points.empty())
-      throw InputError("the bank has no surface points (inline modes)");
-    for (int c = 0; c < 3; ++c) {
-      lo[c] = bank->model->points[0][c];
-      hi[c] = lo[c];
-    }
-    for (const Vec3& p : bank->model->points) {
-      for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], p[c]);
-        hi[c] = std::max(hi[c], p[c]);
-      }
-    }
-    return CHLADNI_OK;
-  });
-}
-
-double chladni_bank_mass(const chladni_bank* bank) {
-  return bank ? bank->mass : 0.0;
-}
-
-chladni_status chladni_spawn(chladni_runtime* rt, chladni_bank* bank, const double position[3],
-                             const double orientation[4], double gain, uint32_t* object) {
-  return capi::guarded("chladni_spawn", [&] {
-    if (!rt || !bank || !object) throw InputError("runtime, bank and object must not be null");
+chladni_status chladni_object_spawn(chladni_runtime* rt, chladni_bank bank,
+                                    const double position[3], const double orientation[4],
+                                    double gain, chladni_object* object) {
+  return capi::guarded("chladni_object_spawn", [&] {
+    if (!rt || !object) throw InputError("runtime and object must not be null");
+    *object = chladni_object{0};
+    rt->reclaim();
+    capi::Bank& b = rt->bank(bank);
     capi::need_vector(position, "position", false);
     const Quat q = capi::unit_quaternion(orientation);
-    if (!std::isfinite(gain)) throw InputError("gain must be finite");
-    if (rt->player->object_count() >= rt->config.max_objects)
-      throw InputError("max_objects (" + std::to_string(rt->config.max_objects) + ") reached");
-    const std::size_t k =
-        rt->player->add_object(bank->modes, {position[0], position[1], position[2]}, q, gain);
-    rt->player->finish_objects();
-    *object = static_cast<uint32_t>(k);
+    if (!(gain >= 0 && std::isfinite(gain))) throw InputError("gain must be finite and >= 0");
+    if (rt->free_places.empty()) {
+      capi::fail(CHLADNI_QUEUE_FULL, "chladni_object_spawn: max_objects (" +
+                                         std::to_string(rt->config.max_objects) +
+                                         ") objects are alive or fading out");
+      return CHLADNI_QUEUE_FULL;
+    }
+    std::unique_ptr<ScenePlayer::PreparedObject> prepared = rt->player->prepare_object(
+        b.modes, b.table.get(), {position[0], position[1], position[2]}, q, gain);
+    const uint32_t k = rt->free_places.back();
+    capi::Place& p = rt->places[k];
+    const uint32_t generation = p.generation + 1 == 0 ? 1 : p.generation + 1;  // id 0 is none
+    const uint64_t id = capi::handle_id(k, generation);
+    if (!rt->changes.push({capi::Change::Kind::Spawn, k, id, prepared.get()}))
+      throw InternalError("the change queue is full");  // sized for every place: a bug
+    prepared.release();  // the audio thread hands it back through `returns`
+    rt->free_places.pop_back();
+    p.generation = generation;
+    ++b.objects;
+    p.bank = &b;
+    p.points.store(b.model && b.model->has_geometry() ? b.model->points.size() : 0,
+                   std::memory_order_relaxed);
+    p.id.store(id, std::memory_order_release);
+    *object = chladni_object{id};
     return CHLADNI_OK;
   });
 }
 
-chladni_status chladni_remove(chladni_runtime* rt, uint32_t object) {
-  return capi::guarded("chladni_remove", [&] {
+chladni_status chladni_object_remove(chladni_runtime* rt, chladni_object object) {
+  return capi::guarded("chladni_object_remove", [&] {
     if (!rt) throw InputError("runtime must not be null");
-    check_target(rt, object, 0.0);
-    rt->player->remove(object);
+    rt->reclaim();
+    const uint32_t k = live(rt, object);
+    if (!rt->changes.push({capi::Change::Kind::Remove, k, object.id, nullptr}))
+      throw InternalError("the change queue is full");
+    rt->places[k].id.store(0, std::memory_order_release);  // commands are refused from now on
     return CHLADNI_OK;
   });
 }
 
 chladni_status chladni_shaker_add(chladni_runtime* rt, const chladni_shaker_desc* desc,
-                                  uint32_t* shaker) {
+                                  chladni_shaker* shaker) {
   return capi::guarded("chladni_shaker_add", [&] {
     if (!rt || !desc || !shaker || !desc->instrument)
       throw InputError("runtime, desc, desc->instrument and shaker must not be null");
-    check_target(rt, desc->object, 0.0);
+    *shaker = chladni_shaker{0};
+    rt->reclaim();
+    const uint32_t k = live(rt, desc->object);
     if (rt->config.shaker_slots == 0)
       throw InputError("the runtime was created with shaker_slots = 0: no room for shakers");
     if (rt->player->shaker_count() >= rt->config.max_shakers)
@@ -242,44 +156,52 @@ chladni_status chladni_shaker_add(chladni_runtime* rt, const chladni_shaker_desc
       throw InputError("particles must be in [0, 1e6]");
     if (!(desc->impulse >= 0 && desc->impulse <= 1e3))
       throw InputError("impulse must be in [0, 1e3] N s");
+    // The object's spawn must have reached the player: its shaker rings its voice.
+    rt->take_changes();
     ShakeEvent ev;
     ev.json_path = "shaker";
-    ev.object = desc->object;
+    ev.object = k;
     ev.instrument = desc->instrument;
     ev.particles = desc->particles;
     ev.resonate_object = desc->resonate_object != 0;
     if (desc->impulse > 0) ev.impulse = desc->impulse;
-    const std::size_t k = rt->player->shaker_count();
+    const std::size_t n = rt->player->shaker_count();
     const ShakerVoice voice =
-        shake_voice(ev, rt->player->modes(desc->object), rt->config.sample_rate, 1 + k);
-    *shaker =
-        static_cast<uint32_t>(rt->player->add_shaker(desc->object, voice, ev.resonate_object));
+        shake_voice(ev, rt->places[k].bank->modes, rt->config.sample_rate, 1 + n);
+    const int s = rt->player->add_shaker(k, voice, ev.resonate_object);
+    rt->shakers[s].object.store(desc->object.id, std::memory_order_relaxed);
+    rt->shaker_count.store(static_cast<uint32_t>(s + 1), std::memory_order_release);
+    *shaker = chladni_shaker{static_cast<uint64_t>(s) + 1};
     return CHLADNI_OK;
   });
 }
 
-chladni_status chladni_post_shake(chladni_runtime* rt, uint32_t shaker, double time,
-                                  double energy) {
-  return capi::guarded("chladni_post_shake", [&] {
+chladni_status chladni_shaker_shake(chladni_runtime* rt, chladni_shaker shaker, double time,
+                                    double energy) {
+  return capi::guarded("chladni_shaker_shake", [&] {
     if (!rt) throw InputError("runtime must not be null");
-    if (shaker >= rt->player->shaker_count())
-      throw InputError("no shaker " + std::to_string(shaker));
-    check_target(rt, static_cast<uint32_t>(rt->player->shaker_object(static_cast<int>(shaker))),
-                 time);
+    if (shaker.id == 0 || shaker.id > rt->shaker_count.load(std::memory_order_acquire))
+      throw InputError("no shaker " + std::to_string(shaker.id));
+    const uint32_t s = static_cast<uint32_t>(shaker.id - 1);
+    const chladni_object object{rt->shakers[s].object.load(std::memory_order_relaxed)};
+    live(rt, object);
+    rt->check_time(time);
     if (!(energy > 0 && energy <= 1)) throw InputError("energy must be in (0, 1]");
     Command c{};
     c.kind = Kind::Shake;
-    c.object = shaker;
+    c.object = object.id;
+    c.shaker = s;
     c.time = time;
     c.impulse = energy;
     return post(rt, c);
   });
 }
 
-chladni_status chladni_post_impact(chladni_runtime* rt, const chladni_impact* im) {
-  return capi::guarded("chladni_post_impact", [&] {
+chladni_status chladni_impact_post(chladni_runtime* rt, const chladni_impact* im) {
+  return capi::guarded("chladni_impact_post", [&] {
     if (!rt || !im) throw InputError("runtime and impact must not be null");
-    check_target(rt, im->object, im->time);
+    const uint32_t k = live(rt, im->object);
+    rt->check_time(im->time);
     if (!(im->impulse > 0 && std::isfinite(im->impulse)))
       throw InputError("impulse must be finite and > 0");
     if (!(im->contact_time >= 0 && im->contact_time <= 0.1))
@@ -287,7 +209,7 @@ chladni_status chladni_post_impact(chladni_runtime* rt, const chladni_impact* im
     capi::need_vector(im->direction, "direction");
     Command c{};
     c.kind = Kind::Impact;
-    c.object = im->object;
+    c.object = im->object.id;
     c.time = im->time;
     c.impulse = im->impulse;
     c.contact = im->contact_time;
@@ -297,11 +219,10 @@ chladni_status chladni_post_impact(chladni_runtime* rt, const chladni_impact* im
                   im->direction[2] * im->direction[2]);
     for (int i = 0; i < 3; ++i) c.a[i] = im->direction[i] / n;
     if (im->vertex >= 0) {
-      const std::size_t points = rt->player->points(im->object);
+      const uint64_t points = rt->places[k].points.load(std::memory_order_relaxed);
       if (static_cast<uint64_t>(im->vertex) >= points)
-        throw InputError("vertex " + std::to_string(im->vertex) + " is out of range (object " +
-                         std::to_string(im->object) + " has " + std::to_string(points) +
-                         " surface points)");
+        throw InputError("vertex " + std::to_string(im->vertex) + " is out of range (the object " +
+                         "has " + std::to_string(points) + " surface points)");
     } else {
       capi::need_vector(im->point, "point", false);
       for (int i = 0; i < 3; ++i) c.b[i] = im->point[i];
@@ -310,16 +231,17 @@ chladni_status chladni_post_impact(chladni_runtime* rt, const chladni_impact* im
   });
 }
 
-chladni_status chladni_post_move(chladni_runtime* rt, uint32_t object, double time,
-                                 const double position[3], const double orientation[4]) {
-  return capi::guarded("chladni_post_move", [&] {
+chladni_status chladni_object_move(chladni_runtime* rt, chladni_object object, double time,
+                                   const double position[3], const double orientation[4]) {
+  return capi::guarded("chladni_object_move", [&] {
     if (!rt) throw InputError("runtime must not be null");
-    check_target(rt, object, time);
+    live(rt, object);
+    rt->check_time(time);
     capi::need_vector(position, "position", false);
     const Quat q = capi::unit_quaternion(orientation);
     Command c{};
     c.kind = Kind::Move;
-    c.object = object;
+    c.object = object.id;
     c.time = time;
     for (int i = 0; i < 3; ++i) c.a[i] = position[i];
     for (int i = 0; i < 4; ++i) c.q[i] = q[i];
@@ -327,11 +249,11 @@ chladni_status chladni_post_move(chladni_runtime* rt, uint32_t object, double ti
   });
 }
 
-chladni_status chladni_post_listener(chladni_runtime* rt, double time, const double position[3],
-                                     const double forward[3], const double up[3]) {
-  return capi::guarded("chladni_post_listener", [&] {
+chladni_status chladni_listener_set(chladni_runtime* rt, double time, const double position[3],
+                                    const double forward[3], const double up[3]) {
+  return capi::guarded("chladni_listener_set", [&] {
     if (!rt) throw InputError("runtime must not be null");
-    if (!std::isfinite(time)) throw InputError("time must be finite");
+    rt->check_time(time);
     capi::need_vector(position, "position", false);
     capi::need_vector(forward, "forward");
     capi::need_vector(up, "up");

@@ -1,4 +1,4 @@
-// chladni_runtime: creation, the command queue's consumer side and rendering.
+// chladni_runtime: creation, the audio thread's side of the queues, and rendering.
 #include <algorithm>
 #include <cmath>
 
@@ -50,6 +50,7 @@ void check_config(const chladni_config& c) {
   if (c.shaker_slots > (1u << 20)) throw InputError("shaker_slots must be at most 2^20");
   if (c.shaker_slots && (c.max_shakers < 1 || c.max_shakers > 4096))
     throw InputError("max_shakers must be in [1, 4096] when shaker_slots > 0");
+  if (!(c.horizon > 0 && c.horizon <= 1e6)) throw InputError("horizon must be in (0, 1e6] s");
   if (c.backend != CHLADNI_BACKEND_CPU && c.backend != CHLADNI_BACKEND_GPU &&
       c.backend != CHLADNI_BACKEND_AUTO)
     throw InputError("backend must be CPU, GPU or AUTO");
@@ -67,7 +68,15 @@ chladni_status fail(chladni_status status, std::string message) {
 }  // namespace chladni::capi
 
 chladni_runtime::chladni_runtime(const chladni_config& c)
-    : config(c), fb(make_filterbank(c)), name(fb->name()), queue(c.queue_capacity) {
+    : config(c),
+      fb(make_filterbank(c)),
+      name(fb->name()),
+      places(std::make_unique<capi::Place[]>(c.max_objects)),
+      shakers(std::make_unique<capi::ShakerPlace[]>(c.shaker_slots ? c.max_shakers : 0)),
+      queue(c.queue_capacity),
+      // Each place has at most a spawn and a removal in flight, and as many returns.
+      changes(2 * std::size_t{c.max_objects}),
+      returns(2 * std::size_t{c.max_objects} + 2) {
   PlayerOptions po;
   po.sample_rate = c.sample_rate;
   po.synth.sample_rate = c.sample_rate;
@@ -75,8 +84,49 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
   po.synth.max_voices = c.max_objects;
   po.shaker_slots = c.shaker_slots;
   po.max_shakers = c.shaker_slots ? c.max_shakers : 0;
+  po.max_objects = c.max_objects;
   player = std::make_unique<ScenePlayer>(*fb, po);
+  player->finish_objects();  // the shared tables, empty: live objects carry their own
   pending.reserve(queue.capacity());
+  installed_ids.assign(c.max_objects, 0);
+  free_places.reserve(c.max_objects);
+  for (uint32_t k = c.max_objects; k-- > 0;) free_places.push_back(k);
+}
+
+chladni_runtime::~chladni_runtime() {
+  // Nothing renders now: whatever is still in flight is freed here.
+  while (const capi::Change* c = changes.front()) {
+    delete c->prepared;
+    changes.pop();
+  }
+  while (const capi::Return* r = returns.front()) {
+    delete r->prepared;
+    returns.pop();
+  }
+  player.reset();  // before the banks its objects point into
+}
+
+// Places the control thread's new objects and removes the ones it removed.
+void chladni_runtime::take_changes() {
+  using capi::Return;
+  auto give_back = [&](const Return& r) {
+    if (!returns.push(r)) ++lost_returns;  // sized so that it cannot fill
+  };
+  while (const capi::Change* c = changes.front()) {
+    const capi::Change ch = *c;
+    changes.pop();
+    if (ch.kind == capi::Change::Kind::Spawn) {
+      if (player->install(ch.place, *ch.prepared)) {
+        installed_ids[ch.place] = ch.id;
+        give_back({Return::Kind::Garbage, ch.place, ch.prepared});
+      } else {
+        give_back({Return::Kind::Refused, ch.place, ch.prepared});
+      }
+    } else if (installed_ids[ch.place] == ch.id) {
+      player->remove(ch.place);
+      installed_ids[ch.place] = 0;
+    }
+  }
 }
 
 // Moves the queued commands into `pending`, keeping it sorted by time (stable).
@@ -117,8 +167,9 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
   keep_if([&](const Command& c) {
     if (c.kind == Kind::Impact || c.kind == Kind::Shake || sample_of(c) > t) return false;
     if (c.kind == Kind::Move) {
-      if (player->active(c.object))
-        player->move(c.object, {c.a[0], c.a[1], c.a[2]}, {c.q[0], c.q[1], c.q[2], c.q[3]});
+      if (installed(c.object))
+        player->move(capi::place_of(c.object), {c.a[0], c.a[1], c.a[2]},
+                     {c.q[0], c.q[1], c.q[2], c.q[3]});
     } else {
       player->set_listener(
           {{c.a[0], c.a[1], c.a[2]}, {c.b[0], c.b[1], c.b[2]}, {c.c[0], c.c[1], c.c[2]}});
@@ -130,18 +181,19 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
     if (c.kind != Kind::Shake) return false;
     const uint64_t at = sample_of(c);
     if (at >= t + frames) return false;
-    if (!player->active(player->shaker_object(c.object))) return true;
+    if (!installed(c.object)) return true;
     // false: the block's shake list is full; it waits for the next block.
-    return player->shake(static_cast<int>(c.object), static_cast<float>(c.impulse),
+    return player->shake(static_cast<int>(c.shaker), static_cast<float>(c.impulse),
                          at <= t ? 0u : static_cast<uint32_t>(at - t));
   });
   keep_if([&](const Command& c) {
     if (c.kind != Kind::Impact) return false;
     const uint64_t at = sample_of(c);
     if (at >= t + frames) return false;
-    if (!player->active(c.object)) return true;
+    if (!installed(c.object)) return true;
+    const uint32_t k = capi::place_of(c.object);
     // The filterbank takes so many kicks per call: the rest wait for the next block.
-    if (synth.pending_excitations() + player->mode_count(c.object) > synth.excitation_capacity())
+    if (synth.pending_excitations() + player->mode_count(k) > synth.excitation_capacity())
       return false;
     ImpactEvent ev;
     ev.impulse = c.impulse;
@@ -152,8 +204,7 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
       ev.point = Vec3{c.b[0], c.b[1], c.b[2]};
     ev.contact_time = c.contact;
     // A late impact (its first sample has passed) is struck at once.
-    player->impact(c.object, ev,
-                   at <= t ? 0.0 : c.time * config.sample_rate - static_cast<double>(t));
+    player->impact(k, ev, at <= t ? 0.0 : c.time * config.sample_rate - static_cast<double>(t));
     return true;
   });
 }
@@ -162,7 +213,8 @@ extern "C" {
 
 void chladni_config_default(chladni_config* c) {
   if (c)
-    *c = chladni_config{CHLADNI_BACKEND_CPU, 48000, 256, 2, 65536, 256, 4096, 256, 0, 4096, 64, 1};
+    *c = chladni_config{
+        CHLADNI_BACKEND_CPU, 48000, 256, 2, 65536, 256, 4096, 256, 0, 4096, 64, 1, 60.0};
 }
 
 const char* chladni_last_error(void) {
@@ -187,10 +239,13 @@ const char* chladni_runtime_backend(const chladni_runtime* rt) {
   return rt ? rt->name.c_str() : "";
 }
 
-chladni_status chladni_render(chladni_runtime* rt, float* out, uint32_t frames) {
-  if (!rt || (!out && frames)) return capi::fail(CHLADNI_INPUT_ERROR, "chladni_render: null");
-  return capi::guarded("chladni_render", [&] {
+chladni_status chladni_runtime_render(chladni_runtime* rt, float* out, uint32_t frames) {
+  if (!rt || (!out && frames))
+    return capi::fail(CHLADNI_INPUT_ERROR, "chladni_runtime_render: null");
+  return capi::guarded("chladni_runtime_render", [&] {
+    // Commands first: a spawn that a drained command's poster saw is then in `changes` too.
     rt->drain();
+    rt->take_changes();
     const int ch = rt->config.channels;
     while (frames > 0) {
       const uint32_t n = rt->until_next_pose(std::min(frames, rt->fb->max_frames()));
@@ -200,16 +255,19 @@ chladni_status chladni_render(chladni_runtime* rt, float* out, uint32_t frames) 
       frames -= n;
       rt->now += n;
     }
+    for (uint32_t k : rt->player->retired())
+      if (!rt->returns.push({capi::Return::Kind::Retired, k, nullptr})) ++rt->lost_returns;
+    rt->player->clear_retired();
     rt->clock.store(rt->now, std::memory_order_release);
     return CHLADNI_OK;
   });
 }
 
-double chladni_latency(const chladni_runtime* rt) {
+double chladni_runtime_latency(const chladni_runtime* rt) {
   return rt ? rt->fb->latency() / rt->config.sample_rate : 0.0;
 }
 
-double chladni_time(const chladni_runtime* rt) {
+double chladni_runtime_time(const chladni_runtime* rt) {
   return rt ? static_cast<double>(rt->clock.load(std::memory_order_acquire)) /
                   rt->config.sample_rate
             : 0.0;

@@ -86,7 +86,7 @@ int Synth::slot_of(VoiceId id, std::size_t mode) const {
   return s < 0 ? s : static_cast<int>(lease_.begin) + s;
 }
 
-Synth::VoiceId Synth::start_voice(std::span<const ModeSpec> modes) {
+Synth::VoiceData Synth::prepare_voice(std::span<const ModeSpec> modes) {
   for (std::size_t i = 0; i < modes.size(); ++i) {
     const ModeSpec& m = modes[i];
     if (!std::isfinite(m.omega_d) || m.omega_d < 0 || !std::isfinite(m.decay) || m.decay < 0 ||
@@ -95,21 +95,34 @@ Synth::VoiceId Synth::start_voice(std::span<const ModeSpec> modes) {
                        ": frequency, decay and gain must be finite and non-negative");
     }
   }
+  VoiceData d;
+  d.modes.assign(modes.begin(), modes.end());
+  d.slot.assign(modes.size(), -1);
+  d.kicked.assign(modes.size(), 0);
+  d.strike_amp.assign(modes.size(), {0.0f, 0.0f});
+  return d;
+}
+
+Synth::VoiceId Synth::start_voice(VoiceData& data) noexcept {
   for (std::size_t v = 0; v < voices_.size(); ++v) {
     if (!voices_[v].alive) {
       Voice& voice = voices_[v];
+      std::swap(static_cast<VoiceData&>(voice), data);
       voice.alive = true;
-      voice.modes.assign(modes.begin(), modes.end());
-      voice.slot.assign(modes.size(), -1);
-      if (kicked_.size() < modes.size()) {
-        kicked_.resize(modes.size());
-        strike_amp_.resize(modes.size());
-      }
       voice.pan[0] = voice.pan[1] = 1.0f;
+      ++alive_;
       return static_cast<VoiceId>(v);
     }
   }
-  throw std::runtime_error("no free voice (max_voices = " + std::to_string(voices_.size()) + ")");
+  return -1;
+}
+
+Synth::VoiceId Synth::start_voice(std::span<const ModeSpec> modes) {
+  VoiceData data = prepare_voice(modes);
+  const VoiceId id = start_voice(data);
+  if (id < 0)
+    throw std::runtime_error("no free voice (max_voices = " + std::to_string(voices_.size()) + ")");
+  return id;
 }
 
 void Synth::apply_gains(uint32_t slot) {
@@ -205,7 +218,7 @@ void Synth::excite(VoiceId id, std::span<const std::complex<float>> amp, uint32_
 }
 
 void Synth::kick(Voice& v, VoiceId id, std::span<const std::complex<float>> amp, uint32_t offset) {
-  std::fill(kicked_.begin(), kicked_.begin() + amp.size(), uint8_t{0});
+  std::fill(v.kicked.begin(), v.kicked.begin() + amp.size(), uint8_t{0});
   // Modes whose kick is below the retire threshold of the strongest one would retire at once.
   double strongest = 0;
   uint32_t new_slots = 0;
@@ -260,7 +273,7 @@ void Synth::kick(Voice& v, VoiceId id, std::span<const std::complex<float>> amp,
         rate_[s] > 0 ? t + static_cast<int64_t>(std::ceil(std::log(ratio) / rate_[s])) : kNever;
     pending_[pending_count_++] =
         Excitation{lease_.begin + static_cast<uint32_t>(s), offset, amp[i].real(), amp[i].imag()};
-    kicked_[i] = 1;
+    v.kicked[i] = 1;
   }
 }
 
@@ -279,9 +292,9 @@ void Synth::strike(VoiceId id, std::span<const std::complex<float>> coupling, do
     const std::complex<double> w = std::complex<double>(coupling[i]) *
                                    contact_weight(1.0, contact, m.omega_d, m.decay) *
                                    std::exp(lambda * delay);
-    strike_amp_[i] = {static_cast<float>(w.real()), static_cast<float>(w.imag())};
+    v.strike_amp[i] = {static_cast<float>(w.real()), static_cast<float>(w.imag())};
   }
-  const std::span amp(strike_amp_.data(), coupling.size());
+  const std::span amp(v.strike_amp.data(), coupling.size());
   kick(v, id, amp, offset);
   const double t0 = static_cast<double>(now_) + start;
   if (ContactForces::end_sample(t0, contact, opt_.sample_rate) <=
@@ -293,7 +306,7 @@ void Synth::strike(VoiceId id, std::span<const std::complex<float>> coupling, do
   }
   bool all = true;
   for (std::size_t i = 0; i < coupling.size(); ++i) {
-    if (!kicked_[i]) continue;
+    if (!v.kicked[i]) continue;
     const ModeSpec& m = v.modes[i];
     all = forces_.add_mode(static_cast<uint32_t>(i), m.omega_d, m.decay,
                            std::complex<double>(coupling[i]), std::complex<double>(amp[i])) &&
@@ -319,6 +332,7 @@ void Synth::stop_voice(VoiceId id) {
   }
   forces_.drop_voice(id);
   v.alive = false;
+  --alive_;
 }
 
 void Synth::render(uint32_t frames, float* out, const DriveInput& drive) {

@@ -36,6 +36,8 @@ ScenePlayer::ScenePlayer(Filterbank& fb, const PlayerOptions& o)
     : fb_(fb), opt_(o), bank_(make_bank(fb, o)), synth_(fb, o.synth) {
   if (!std::isfinite(o.gain)) throw InputError("scene gain must be finite");
   shakers_.reserve(o.max_shakers);
+  objects_.reserve(o.max_objects);
+  retired_.reserve(o.max_objects);
 }
 
 ScenePlayer::~ScenePlayer() = default;
@@ -62,7 +64,7 @@ std::size_t ScenePlayer::add_object(const ObjectModes& modes, const Vec3& positi
 void ScenePlayer::finish_objects() {
   std::size_t transfer_modes = 0;
   for (const Object& o : objects_)
-    if (o.modes.transfer) transfer_modes += o.modes.modes.size();
+    if (o.modes.transfer && !o.own_table) transfer_modes += o.modes.modes.size();
   const bool on_device = opt_.gain_device && transfer_modes >= opt_.gpu_gain_modes;
   pool_ = std::make_unique<ThreadPool>(transfer_modes >= kThreadedGainModes
                                            ? int(std::max(1u, std::thread::hardware_concurrency()))
@@ -73,7 +75,7 @@ void ScenePlayer::finish_objects() {
   for (std::size_t k = 0; k < objects_.size(); ++k) {
     Object& o = objects_[k];
     o.table = -1;
-    if (!o.modes.transfer) continue;
+    if (!o.modes.transfer || o.own_table) continue;
     std::size_t same = 0;
     while (same < k && objects_[same].modes.transfer != o.modes.transfer) ++same;
     o.table = static_cast<int>(same < k ? table_.add_instance(objects_[same].table)
@@ -89,6 +91,59 @@ void ScenePlayer::finish_objects() {
   dirty_ = true;
 }
 
+std::unique_ptr<TransferTable> object_transfer_table(const Transfer& transfer, bool maps) {
+  auto table = std::make_unique<TransferTable>();
+  if (!maps) table->map_options.reset();
+  table->add(transfer);
+  return table;
+}
+
+std::unique_ptr<ScenePlayer::PreparedObject> ScenePlayer::prepare_object(const ObjectModes& modes,
+                                                                         const TransferTable* table,
+                                                                         const Vec3& position,
+                                                                         const Quat& orientation,
+                                                                         double gain) const {
+  if (!std::isfinite(gain)) throw InputError("object gain must be finite");
+  if (modes.transfer && (!table || table->mode_count() != modes.modes.size()))
+    throw InternalError("player: a live object with transfer needs its table");
+  auto p = std::make_unique<PreparedObject>();
+  p->voice = Synth::prepare_voice(modes.modes);
+  Object& o = p->object;
+  o.modes = modes;
+  o.position = position;
+  o.orientation = orientation;
+  o.gain = gain;
+  o.gains.assign(modes.modes.size(), 0.0f);
+  o.coupling.assign(modes.modes.size(), {0.0f, 0.0f});
+  if (modes.transfer) {
+    o.own_table = table;
+    o.own_gains.assign(modes.modes.size(), 0.0f);
+    const Vec3 origin{0, 0, 0};
+    o.own_frame.update(*table, std::span(&origin, 1));  // sized here: updates allocate nothing
+  }
+  return p;
+}
+
+bool ScenePlayer::install(std::size_t k, PreparedObject& p) noexcept {
+  if (k > objects_.size() || k >= objects_.capacity()) return false;
+  if (k < objects_.size() && (objects_[k].voice >= 0 || objects_[k].fading >= 0)) return false;
+  const Synth::VoiceId v = synth_.start_voice(p.voice);
+  if (v < 0) return false;
+  p.object.voice = v;
+  p.object.fading = -1;
+  p.object.table = -1;
+  if (k == objects_.size())
+    objects_.push_back(std::move(p.object));  // within the reserved capacity
+  else
+    std::swap(objects_[k], p.object);
+  dirty_ = true;
+  return true;
+}
+
+void ScenePlayer::retire(std::size_t k) {
+  if (retired_.size() < retired_.capacity()) retired_.push_back(static_cast<uint32_t>(k));
+}
+
 std::string ScenePlayer::gain_backend() const {
   return table_.mode_count() == 0 ? "" : gpu_gains_ ? "gpu" : "cpu";
 }
@@ -100,7 +155,7 @@ int ScenePlayer::add_shaker(std::size_t object, const ShakerVoice& voice, bool r
   if (resonate && voice.resonances.size() != o.modes.modes.size())
     throw InternalError("player: a resonating shaker needs one resonance per mode");
   const int k = bank_->add_voice(voice);
-  shakers_.push_back({object, resonate, voice.resonances.size()});
+  shakers_.push_back({object, resonate, voice.resonances.size(), false});
   flat_.resize(std::max(flat_.size(), voice.resonances.size()));
   dirty_ = true;
   return k;
@@ -108,14 +163,14 @@ int ScenePlayer::add_shaker(std::size_t object, const ShakerVoice& voice, bool r
 
 bool ScenePlayer::shake(int k, float energy, uint32_t offset) {
   if (!bank_ || k < 0 || static_cast<std::size_t>(k) >= shakers_.size()) return false;
-  if (objects_[shakers_[k].object].voice < 0) return false;
+  if (shakers_[k].dead) return false;
   return bank_->shake(k, energy, offset);
 }
 
 void ScenePlayer::apply_shaker_gains(int k) {
   const Shaker& sh = shakers_[k];
   const Object& o = objects_[sh.object];
-  if (o.voice < 0) {  // removed: a zero pan silences every resonance
+  if (o.voice < 0 || sh.dead) {  // removed: a zero pan silences every resonance
     bank_->set_gains(k, std::span(flat_).first(sh.resonances), 0, 0);
   } else if (sh.resonate) {
     bank_->set_gains(k, o.gains, o.pan[0], o.pan[1]);
@@ -140,6 +195,7 @@ void ScenePlayer::remove(std::size_t k) {
   synth_.set_mode_gains(o.voice, o.gains);
   if (fb_.gain_ramp() == 0) {
     synth_.stop_voice(o.voice);
+    retire(k);
   } else {
     o.fading = o.voice;
     o.fade_end = synth_.time() + fb_.gain_ramp();
@@ -147,7 +203,10 @@ void ScenePlayer::remove(std::size_t k) {
   }
   o.voice = -1;
   for (std::size_t s = 0; s < shakers_.size(); ++s)
-    if (shakers_[s].object == k) apply_shaker_gains(static_cast<int>(s));
+    if (shakers_[s].object == k && !shakers_[s].dead) {
+      shakers_[s].dead = true;
+      apply_shaker_gains(static_cast<int>(s));
+    }
 }
 
 void ScenePlayer::set_listener(const Listener& listener) {
@@ -173,7 +232,9 @@ void ScenePlayer::apply_gains(Object& o) {
   const double g = opt_.gain * o.gain;
   o.spread = g / std::max(r, kMinDistance);
   std::span<const float> xfer;
-  if (o.table >= 0)
+  if (o.own_table)
+    xfer = o.own_gains;
+  else if (o.table >= 0)
     xfer = std::span(table_gains_).subspan(table_.objects[o.table].first_mode, o.gains.size());
   listener_mode_gains(o.modes, xfer, g, o.spread, o.gains);
   synth_.set_mode_gains(o.voice, o.gains);
@@ -184,6 +245,12 @@ void ScenePlayer::apply_gains(Object& o) {
     o.pan[1] = static_cast<float>(std::sin(theta));
     synth_.set_pan(o.voice, o.pan[0], o.pan[1]);
   }
+}
+
+void ScenePlayer::own_transfer_gains(Object& o) {
+  const Vec3 local = rotate_inverse(o.orientation, sub(listener_.position, o.position));
+  o.own_frame.update(*o.own_table, std::span(&local, 1));
+  transfer_gains(*o.own_table, o.own_frame, o.own_gains);
 }
 
 bool ScenePlayer::update_gains() {
@@ -201,9 +268,12 @@ bool ScenePlayer::update_gains() {
     else
       transfer_gains(table_, frame_, table_gains_, pool_.get());
   }
-  for (Object& o : objects_) apply_gains(o);
+  for (Object& o : objects_) {
+    if (o.own_table && o.voice >= 0) own_transfer_gains(o);
+    apply_gains(o);
+  }
   for (std::size_t s = 0; s < shakers_.size(); ++s)  // remove() silenced the others once
-    if (objects_[shakers_[s].object].voice >= 0) apply_shaker_gains(static_cast<int>(s));
+    if (!shakers_[s].dead) apply_shaker_gains(static_cast<int>(s));
   dirty_ = false;
   ++gain_updates_;
   gain_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -221,6 +291,7 @@ void ScenePlayer::render(uint32_t frames, float* out) {
       synth_.stop_voice(o.fading);
       o.fading = -1;
       --fading_;
+      retire(k);
     }
   }
 }

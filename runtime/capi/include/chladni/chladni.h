@@ -1,16 +1,31 @@
-/* Chladni's C API: the modal-sound runtime for engines. Opaque handles, status codes and
- * chladni_last_error() for the message; no exception crosses it.
+/* Chladni's C API, version 2: the modal-sound runtime for engines. Handles are small structs
+ * passed by value (chladni_bank, chladni_object, chladni_shaker; id 0 is none) and the runtime
+ * pointer; calls return a status, with chladni_last_error() for the message; no exception crosses
+ * it. Names follow chladni_<noun>_<verb>.
  *
- * Threads: chladni_runtime_create/destroy, the bank calls, chladni_spawn, chladni_shaker_add and
- * chladni_remove are control calls: they allocate, and must not run while chladni_render does. The
- * chladni_post_* calls come from one producer thread (a game thread) and chladni_render from one
- * consumer (the audio thread): they talk through a lock-free queue, allocate nothing, and never
- * wait.
+ * Threads. Three roles, each on one thread at a time (control and game may be the same thread):
+ *  - control: chladni_runtime_create/destroy, the chladni_bank_* calls, chladni_object_spawn and
+ *    chladni_object_remove. These allocate and may run while the audio thread renders: a new
+ *    object is made here and handed to the audio thread through a queue, placed at the next
+ *    block boundary; a removed one fades out there and is freed here afterwards.
+ *  - game: chladni_impact_post, chladni_object_move, chladni_listener_set and
+ *    chladni_shaker_shake. Lock-free and allocation-free; they reach the audio thread through a
+ *    single-producer single-consumer queue.
+ *  - audio: chladni_runtime_render. It never allocates, locks or waits (beyond the filterbank's
+ *    own work).
+ *  chladni_shaker_add is a control call that must not run while chladni_runtime_render does.
+ *  chladni_runtime_time, chladni_runtime_latency and chladni_last_error may be called anywhere.
  *
- * Time: the runtime's clock is the audio it has rendered (chladni_time). A posted command
+ * Lifetimes. The runtime owns every bank and object. chladni_bank_release gives up the caller's
+ * bank: it is freed once no object of it is left (removed objects count until their fade ends).
+ * chladni_runtime_destroy frees everything. A handle of something removed or released is refused
+ * with CHLADNI_INPUT_ERROR, never reused by another (ids carry a generation).
+ *
+ * Time: the runtime's clock is the audio it has rendered (chladni_runtime_time). A posted command
  * carries a time on that clock; impacts land on their sample (sub-sample accurate), moves and
  * listener changes on their first sample, the gains then ramping over gain_ramp samples. A
- * command whose time has passed applies at once. See docs/embedding.md. */
+ * command whose time has passed applies at once; one more than config.horizon seconds ahead is
+ * refused. See docs/embedding.md, which also lists what changed from version 1. */
 #ifndef CHLADNI_H
 #define CHLADNI_H
 
@@ -21,7 +36,7 @@
 extern "C" {
 #endif
 
-#define CHLADNI_API_VERSION 1
+#define CHLADNI_API_VERSION 2
 
 typedef enum chladni_status {
   CHLADNI_OK = 0,
@@ -43,19 +58,28 @@ typedef struct chladni_config {
   uint32_t block_size;     /* 256: frames per filterbank call (renders split larger requests) */
   int channels;            /* 2: 1 or 2 (constant-power pan) */
   uint32_t mode_budget;    /* 65536: modes resident at once; the least audible are stolen */
-  uint32_t max_objects;    /* 256 */
+  uint32_t max_objects;    /* 256: objects alive or fading out at once */
   uint32_t queue_capacity; /* 4096: commands posted between two renders */
   uint32_t gain_ramp;      /* 256: samples over which gain changes ramp, across renders */
   int threads;             /* 0: all hardware threads (CPU backend) */
   uint32_t shaker_slots;   /* 4096: resonances of all shakers together (0: no shakers) */
   uint32_t max_shakers;    /* 64 */
   int gpu_pipeline;        /* 1: the GPU backend's render returns without waiting for the
-                              device, its output block_size frames late (chladni_latency); 0:
-                              each render waits for its own block */
+                              device, its output block_size frames late
+                              (chladni_runtime_latency); 0: each render waits for its own block */
+  double horizon;          /* 60: seconds ahead of the clock a command may be timed */
 } chladni_config;
 
 typedef struct chladni_runtime chladni_runtime;
-typedef struct chladni_bank chladni_bank;
+typedef struct chladni_bank {
+  uint64_t id;
+} chladni_bank;
+typedef struct chladni_object {
+  uint64_t id;
+} chladni_object;
+typedef struct chladni_shaker {
+  uint64_t id;
+} chladni_shaker;
 
 /* Fills `config` with the defaults above. */
 void chladni_config_default(chladni_config* config);
@@ -67,16 +91,16 @@ void chladni_runtime_destroy(chladni_runtime* runtime);
 /* The filterbank in words, e.g. "cpu (avx512, 2 threads)". */
 const char* chladni_runtime_backend(const chladni_runtime* runtime);
 
-/* Banks: a soundbank (chladni precompute) from a file or from its bytes, or inline modes
- * (frequency Hz, decay 1/s, pressure at 1 m per N s). Modes above the runtime's Nyquist
- * frequency are dropped; a bank with none left is refused. */
+/* Banks (control calls): a soundbank (chladni precompute) from a file or from its bytes, or
+ * inline modes (frequency Hz, decay 1/s, pressure at 1 m per N s). Modes above the runtime's
+ * Nyquist frequency are dropped; a bank with none left is refused. */
 chladni_status chladni_bank_load_file(chladni_runtime* runtime, const char* path,
-                                      chladni_bank** out);
+                                      chladni_bank* out);
 chladni_status chladni_bank_load_memory(chladni_runtime* runtime, const void* bytes, size_t size,
-                                        chladni_bank** out);
+                                        chladni_bank* out);
 chladni_status chladni_bank_from_modes(chladni_runtime* runtime, const double* frequency_hz,
                                        const double* decay, const double* amplitude, size_t count,
-                                       chladni_bank** out);
+                                       chladni_bank* out);
 /* A free-free rectangular bar described analytically (Euler-Bernoulli bending across its
  * thickness and width, axial modes), as a scene's "bar" object: no precompute needed. The bar
  * lies along x from 0 to length, its top face at z = thickness. */
@@ -90,27 +114,34 @@ typedef struct chladni_bar {
 } chladni_bar;
 /* Fills `bar` with the scene format's defaults: a 0.3 x 0.03 x 0.01 m steel bar. */
 void chladni_bar_default(chladni_bar* bar);
-chladni_status chladni_bank_bar(chladni_runtime* runtime, const chladni_bar* bar,
-                                chladni_bank** out);
-size_t chladni_bank_mode_count(const chladni_bank* bank);
-size_t chladni_bank_point_count(const chladni_bank* bank); /* surface points (0: inline) */
+chladni_status chladni_bank_from_bar(chladni_runtime* runtime, const chladni_bar* bar,
+                                     chladni_bank* out);
+/* Gives up the caller's bank: it is freed when its last object has faded out. Control call. */
+chladni_status chladni_bank_release(chladni_runtime* runtime, chladni_bank bank);
+/* Modes and surface points (0: inline modes) of a bank; 0 for an unknown handle. Control. */
+size_t chladni_bank_mode_count(const chladni_runtime* runtime, chladni_bank bank);
+size_t chladni_bank_point_count(const chladni_runtime* runtime, chladni_bank bank);
 /* The axis-aligned box of a bank's surface points in its own frame (m), for a collision shape.
- * CHLADNI_INPUT_ERROR for a bank without geometry (inline modes). */
-chladni_status chladni_bank_bounds(const chladni_bank* bank, double min[3], double max[3]);
+ * CHLADNI_INPUT_ERROR for a bank without geometry (inline modes). Control call. */
+chladni_status chladni_bank_bounds(const chladni_runtime* runtime, chladni_bank bank, double min[3],
+                                   double max[3]);
 /* The solid's mass (kg): its closed surface's volume times the material's density, for a
- * rigid body. 0 for inline modes. */
-double chladni_bank_mass(const chladni_bank* bank);
+ * rigid body. 0 for inline modes or an unknown handle. Control call. */
+double chladni_bank_mass(const chladni_runtime* runtime, chladni_bank bank);
 
 /* An instance of a bank at a pose (position in m; orientation a unit quaternion w, x, y, z,
- * object frame to world) with a gain; `object` receives its index. Control call. */
-chladni_status chladni_spawn(chladni_runtime* runtime, chladni_bank* bank, const double position[3],
-                             const double orientation[4], double gain, uint32_t* object);
-/* Silences an object (its sound fades out over gain_ramp samples) and refuses commands for it
- * from then on. Control call. */
-chladni_status chladni_remove(chladni_runtime* runtime, uint32_t object);
+ * object frame to world) with a gain (finite, >= 0). It sounds from the next block the audio
+ * thread starts; commands may be posted for it at once. CHLADNI_QUEUE_FULL when max_objects
+ * objects are alive or still fading out. Control call. */
+chladni_status chladni_object_spawn(chladni_runtime* runtime, chladni_bank bank,
+                                    const double position[3], const double orientation[4],
+                                    double gain, chladni_object* object);
+/* Silences an object (its sound fades out over gain_ramp samples, and its place is reused after
+ * that) and refuses commands for it from now on. Control call. */
+chladni_status chladni_object_remove(chladni_runtime* runtime, chladni_object object);
 
 typedef struct chladni_impact {
-  uint32_t object;
+  chladni_object object;
   double time;         /* s on the runtime's clock */
   double impulse;      /* N s, > 0 */
   double direction[3]; /* object frame; normalized here */
@@ -119,17 +150,16 @@ typedef struct chladni_impact {
   double contact_time; /* s, 0 to 0.1: a half-sine force; 0 is an ideal impulse */
 } chladni_impact;
 
-/* Commands: from one producer thread; CHLADNI_QUEUE_FULL when the queue has no room. */
-chladni_status chladni_post_impact(chladni_runtime* runtime, const chladni_impact* impact);
-chladni_status chladni_post_move(chladni_runtime* runtime, uint32_t object, double time,
-                                 const double position[3], const double orientation[4]);
-chladni_status chladni_post_listener(chladni_runtime* runtime, double time,
-                                     const double position[3], const double forward[3],
-                                     const double up[3]);
+/* Commands: game thread; CHLADNI_QUEUE_FULL when the queue has no room until the next render. */
+chladni_status chladni_impact_post(chladni_runtime* runtime, const chladni_impact* impact);
+chladni_status chladni_object_move(chladni_runtime* runtime, chladni_object object, double time,
+                                   const double position[3], const double orientation[4]);
+chladni_status chladni_listener_set(chladni_runtime* runtime, double time, const double position[3],
+                                    const double forward[3], const double up[3]);
 
-/* A shaker: PhISEM particles (Cook 1997) in or at an object, played by chladni_post_shake. */
+/* A shaker: PhISEM particles (Cook 1997) in or at an object, played by chladni_shaker_shake. */
 typedef struct chladni_shaker_desc {
-  uint32_t object;        /* the object the particles are in */
+  chladni_object object;  /* the object the particles are in */
   const char* instrument; /* a PhISEM preset: "maraca", "gravel", "coins", ... (chladni shake
                              --list) */
   double particles;       /* 0: the instrument's own count */
@@ -138,22 +168,24 @@ typedef struct chladni_shaker_desc {
   double impulse;         /* N s per unit of excitation on the surface (resonate_object); 0: 1e-3 */
 } chladni_shaker_desc;
 
-/* Adds a shaker, silent until shaken; `shaker` receives its index. Its sound follows its
- * object's pose and ends when the object is removed. Control call. */
+/* Adds a shaker, silent until shaken. Its sound follows its object's pose and ends for good
+ * when the object is removed (max_shakers counts every shaker added). Control call that must not
+ * run while chladni_runtime_render does. */
 chladni_status chladni_shaker_add(chladni_runtime* runtime, const chladni_shaker_desc* desc,
-                                  uint32_t* shaker);
-/* Shakes: adds `energy` (0 to 1] to the particles at `time`. A command, as chladni_post_*. */
-chladni_status chladni_post_shake(chladni_runtime* runtime, uint32_t shaker, double time,
-                                  double energy);
+                                  chladni_shaker* shaker);
+/* Shakes: adds `energy` (0 to 1] to the particles at `time`. Game thread, as the other
+ * commands. */
+chladni_status chladni_shaker_shake(chladni_runtime* runtime, chladni_shaker shaker, double time,
+                                    double energy);
 
 /* Renders `frames` interleaved frames into `out` (frames * channels floats, Pa at the
  * listener). Audio thread: no allocation, no lock, no wait beyond the filterbank's own work. */
-chladni_status chladni_render(chladni_runtime* runtime, float* out, uint32_t frames);
-/* Seconds rendered so far, as of the last chladni_render to return; any thread may ask. */
-double chladni_time(const chladni_runtime* runtime);
+chladni_status chladni_runtime_render(chladni_runtime* runtime, float* out, uint32_t frames);
+/* Seconds rendered so far, as of the last render to return; any thread may ask. */
+double chladni_runtime_time(const chladni_runtime* runtime);
 /* Seconds by which the output lags the runtime's clock: an event at time t is heard at output
  * time t + latency. 0 on the CPU backend; block_size / sample_rate on the pipelined GPU one. */
-double chladni_latency(const chladni_runtime* runtime);
+double chladni_runtime_latency(const chladni_runtime* runtime);
 
 #ifdef __cplusplus
 }

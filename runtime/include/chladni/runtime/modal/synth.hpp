@@ -4,8 +4,9 @@
 // whose envelope has fallen `retire_db` below its peak is retired and its slot reused. When the
 // mode budget is full, the least audible resident modes are stolen.
 //
-// Threading: start_voice() allocates and belongs on a control thread; excite(), set_*(),
-// stop_voice() and render() do not allocate, lock or block (beyond the filterbank's own work).
+// Threading: prepare_voice() and start_voice(span) allocate and belong on a control thread;
+// start_voice(VoiceData&), excite(), set_*(), stop_voice() and render() do not allocate, lock or
+// block (beyond the filterbank's own work).
 #include <complex>
 #include <cstdint>
 #include <span>
@@ -49,8 +50,24 @@ class Synth {
   Synth(const Synth&) = delete;
   Synth& operator=(const Synth&) = delete;
 
-  /// Registers a voice (no slot is taken yet). Throws InputError on non-finite values.
+  /// A voice's storage: its modes, their slots and the scratch of its strikes.
+  struct VoiceData {
+    std::vector<ModeSpec> modes;
+    std::vector<int32_t> slot;    // -1 when not resident
+    std::vector<uint8_t> kicked;  // per mode of the last kick(): whether it reached the filterbank
+    std::vector<std::complex<float>> strike_amp;
+  };
+  /// The storage of a voice of `modes`, made off the audio thread. Throws InputError on
+  /// non-finite or negative values.
+  static VoiceData prepare_voice(std::span<const ModeSpec> modes);
+  /// Registers a prepared voice (no slot is taken yet) without allocating: `data` receives the
+  /// storage the voice's place held before, for the caller to free off the audio thread. -1 when
+  /// max_voices voices are alive.
+  VoiceId start_voice(VoiceData& data) noexcept;
+  /// prepare_voice() and start_voice(data) in one (control thread). Throws when no voice is free.
   VoiceId start_voice(std::span<const ModeSpec> modes);
+  /// Voices alive.
+  uint32_t voice_count() const { return alive_; }
   /// Per-channel gains of the whole voice (right ignored in mono). Default 1, 1.
   void set_pan(VoiceId voice, float left, float right);
   /// New per-mode gains; resident modes change at the next render().
@@ -80,10 +97,8 @@ class Synth {
   int slot_of(VoiceId voice, std::size_t mode) const;
 
  private:
-  struct Voice {
+  struct Voice : VoiceData {
     bool alive = false;
-    std::vector<ModeSpec> modes;
-    std::vector<int32_t> slot;  // -1 when not resident
     float pan[2] = {1, 1};
   };
   void kick(Voice& voice, VoiceId id, std::span<const std::complex<float>> amplitude,
@@ -114,15 +129,13 @@ class Synth {
   std::vector<uint32_t> group_used_;  // resident slots per group of 256
   std::vector<std::pair<float, uint32_t>> steal_scratch_;
   std::vector<Excitation> pending_;
-  std::vector<uint8_t> kicked_;  // per mode of the last kick(): whether it reached the filterbank
-  std::vector<std::complex<float>> strike_amp_;
   ContactForces forces_;
   // The contact forces are added on the host: behind a filterbank whose output lags (a pipelined
   // device), they lag as much, through this ring of (latency + max_frames) frames.
   std::vector<float> force_block_, force_delay_;
   std::size_t delay_head_ = 0;
   std::size_t pending_count_ = 0;
-  uint32_t used_ = 0, high_water_ = 0, scan_cursor_ = 0;
+  uint32_t used_ = 0, high_water_ = 0, scan_cursor_ = 0, alive_ = 0;
   uint64_t now_ = 0;
   SynthStats stats_;
 };

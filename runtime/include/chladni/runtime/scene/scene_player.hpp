@@ -8,6 +8,9 @@
 //
 // Threading: add_object() and add_shaker() allocate (a control thread, never during render());
 // move(), set_listener(), impact(), shake() and render() do not allocate once objects are added.
+// A live scene (an engine's) changes while it plays: prepare_object() allocates off the audio
+// thread, install() places the object between renders without allocating, and a removed object's
+// place is reported by retired() once its fade has ended, for the next install().
 #include <chrono>
 #include <memory>
 #include <span>
@@ -41,6 +44,8 @@ struct PlayerOptions {
   uint32_t shaker_slots = 0;
   uint32_t max_shakers = 0;
   uint64_t seed = 1;  ///< the shakers' random streams
+  /// Places reserved for objects, so that install() never allocates (0: grown as added).
+  uint32_t max_objects = 0;
 };
 
 class ScenePlayer {
@@ -60,6 +65,23 @@ class ScenePlayer {
   /// Prepares the listener-gain tables for the objects added so far (maps, device buffers);
   /// done by the first update otherwise. Control thread.
   void finish_objects();
+
+  /// An object made ready off the audio thread; install() takes it.
+  struct PreparedObject;
+  /// Prepares an object (its voice, gains and scratch; allocates). `table` holds the transfer of
+  /// `modes` as one object (object_transfer_table(); shared by instances, and it must outlive
+  /// the object); null when `modes` has no transfer. Throws InputError on bad values.
+  std::unique_ptr<PreparedObject> prepare_object(const ObjectModes& modes,
+                                                 const TransferTable* table, const Vec3& position,
+                                                 const Quat& orientation, double gain) const;
+  /// Places `prepared` at index `object` (the next new index, or one retired()) without
+  /// allocating; `prepared` then holds what the place held before, to be freed off the audio
+  /// thread. False when the place is taken, beyond max_objects, or every voice is in use.
+  bool install(std::size_t object, PreparedObject& prepared) noexcept;
+  /// Objects removed whose fade has ended since clear_retired(): their places may be installed
+  /// again. Recorded up to max_objects.
+  std::span<const uint32_t> retired() const { return retired_; }
+  void clear_retired() { retired_.clear(); }
 
   /// Adds a shaker at `object`: a voice whose resonances are the object's modes (`resonate`:
   /// they take the object's listener gains) or an instrument's own (they take the object's
@@ -117,6 +139,10 @@ class ScenePlayer {
     Quat orientation{1, 0, 0, 0};
     double gain = 1;
     int table = -1;  // index in table_.objects
+    // A live object's own transfer table (table = -1), its frame and gains.
+    const TransferTable* own_table = nullptr;
+    ListenerFrame own_frame;
+    std::vector<float> own_gains;
     std::vector<float> gains;
     std::vector<std::complex<float>> coupling;
     float pan[2] = {1, 1};
@@ -126,8 +152,11 @@ class ScenePlayer {
     std::size_t object;
     bool resonate;
     std::size_t resonances;
+    bool dead = false;  // its object was removed (whatever takes the place later is another)
   };
   void apply_gains(Object& object);
+  void own_transfer_gains(Object& object);
+  void retire(std::size_t object);
   void apply_shaker_gains(int shaker);
 
   Filterbank& fb_;
@@ -138,6 +167,7 @@ class ScenePlayer {
   std::size_t fading_ = 0;   // removed objects still fading out
   std::vector<float> flat_;  // an instrument shaker's gains, one per resonance
   std::vector<Object> objects_;
+  std::vector<uint32_t> retired_;
   Listener listener_;
   bool dirty_ = true;
   // Listener gains from transfer.
@@ -151,5 +181,14 @@ class ScenePlayer {
   uint64_t gain_updates_ = 0;
   double gain_seconds_ = 0;
 };
+
+struct ScenePlayer::PreparedObject {
+  Object object;
+  Synth::VoiceData voice;
+};
+
+/// One object's transfer as a table of its own, for prepare_object(); with far-field maps when
+/// `maps`.
+std::unique_ptr<TransferTable> object_transfer_table(const Transfer& transfer, bool maps);
 
 }  // namespace chladni::runtime
