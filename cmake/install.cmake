@@ -1,5 +1,7 @@
 # cmake --install: the runtime's libraries and headers, the chladni command, CMake package files
-# (find_package(Chladni): Chladni::core, ::gpu, ::runtime, ::capi) and a pkg-config file. The
+# (find_package(Chladni): Chladni::chladni, the shared C library; Chladni::core, ::gpu,
+# ::runtime, ::capi, the static ones) and pkg-config files (chladni: the shared library;
+# chladni-static: the static ones). The
 # precompute library (TetGen, CGAL, hmat-oss) is not installed: engines link the runtime only.
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
@@ -9,8 +11,10 @@ foreach(t ${CHLADNI_EXPORTED})
   string(REPLACE "chladni_" "" short ${t})
   set_target_properties(${t} PROPERTIES EXPORT_NAME ${short})
 endforeach()
-install(TARGETS ${CHLADNI_EXPORTED} EXPORT ChladniTargets
+set_target_properties(chladni_shared PROPERTIES EXPORT_NAME chladni)
+install(TARGETS ${CHLADNI_EXPORTED} chladni_shared EXPORT ChladniTargets
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+        LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
         INCLUDES DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
 install(TARGETS chladni RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(DIRECTORY core/include/ gpu/include/ runtime/include/ runtime/capi/include/
@@ -33,4 +37,6 @@ file(RELATIVE_PATH CHLADNI_PC_TO_PREFIX ${CMAKE_INSTALL_FULL_LIBDIR}/pkgconfig
      ${CMAKE_INSTALL_PREFIX})
 string(REGEX REPLACE "/$" "" CHLADNI_PC_TO_PREFIX "${CHLADNI_PC_TO_PREFIX}")
 configure_file(cmake/chladni.pc.in ${PROJECT_BINARY_DIR}/chladni.pc @ONLY)
-install(FILES ${PROJECT_BINARY_DIR}/chladni.pc DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+configure_file(cmake/chladni-static.pc.in ${PROJECT_BINARY_DIR}/chladni-static.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/chladni.pc ${PROJECT_BINARY_DIR}/chladni-static.pc
+        DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)

@@ -18,14 +18,33 @@ cmake -S "$src/examples/embedding" -B "$tmp/embed" -G Ninja -DCMAKE_BUILD_TYPE=R
 cmake --build "$tmp/embed" > "$tmp/build.log"
 "$tmp/embed/minimal_c"
 "$tmp/embed/minimal_cpp"
-# pkg-config, from C, as a Makefile would.
+# pkg-config, from C, as a Makefile would: the static libraries with a C++ linker.
 PKG_CONFIG_PATH=$(dirname "$(find "$tmp/prefix" -name chladni.pc)")
 export PKG_CONFIG_PATH
-cc -std=c11 -c "$src/examples/embedding/minimal.c" $(pkg-config --cflags chladni) -o "$tmp/m.o"
-c++ "$tmp/m.o" $(pkg-config --libs chladni) -o "$tmp/minimal_pc"
+cc -std=c11 -c "$src/examples/embedding/minimal.c" $(pkg-config --cflags chladni-static) -o "$tmp/m.o"
+c++ "$tmp/m.o" $(pkg-config --libs chladni-static) -o "$tmp/minimal_pc"
+# The shared library exports the C API's symbols and nothing else, and a C linker suffices:
+# through pkg-config, and through find_package in a C-only CMake project.
+so=$(find "$tmp/prefix" -name 'libchladni.so.2')
+test -n "$so"
+declared=$(grep -oE '\bchladni_[a-z_]+\(' "$tmp/prefix/include/chladni/chladni.h" | tr -d '(' | sort -u)
+exported=$(nm -D --defined-only "$so" | awk '{ print $3 }' | sort -u)
+if [[ "$declared" != "$exported" ]]; then
+  echo "libchladni.so must export exactly the functions chladni.h declares (< declared, > exported):" >&2
+  diff <(echo "$declared") <(echo "$exported") >&2 || true
+  exit 1
+fi
+cc -std=c11 "$src/examples/embedding/minimal.c" $(pkg-config --cflags --libs chladni) -lm \
+  -o "$tmp/minimal_so"
+readelf -d "$tmp/minimal_so" | grep -q 'libchladni.so.2'
+LD_LIBRARY_PATH=$(dirname "$so") "$tmp/minimal_so"
+cmake -S "$src/tests/c_consumer" -B "$tmp/c_consumer" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$tmp/prefix" > "$tmp/c-configure.log"
+cmake --build "$tmp/c_consumer" > "$tmp/c-build.log"
+"$tmp/c_consumer/minimal_shared"
 # The runtime carries no GPL code: an engine's binary links neither FFTW nor the precompute side.
-for bin in "$tmp/embed/minimal_c" "$tmp/embed/minimal_cpp" "$tmp/minimal_pc"; do
-  if ldd "$bin" | grep -Eiq 'fftw|tet|cgal|cholmod|hmat'; then
+for bin in "$tmp/embed/minimal_c" "$tmp/embed/minimal_cpp" "$tmp/minimal_pc" "$tmp/minimal_so"; do
+  if LD_LIBRARY_PATH=$(dirname "$so") ldd "$bin" | grep -Eiq 'fftw|tet|cgal|cholmod|hmat'; then
     echo "$bin links a GPL/AGPL library:" >&2
     ldd "$bin" >&2
     exit 1
@@ -41,4 +60,4 @@ test "$(grep -c ',impact,' "$tmp/f.csv")" -gt 4
 test "$(grep -c ',scrape,' "$tmp/f.csv")" -gt 0  # sliding bodies scrape
 awk '/first impact at/ { i = $(NF-9); s = $(NF-4); d = s - i; if (i < 0 || d < 0 || d > 0.001) exit 1 }' \
   "$tmp/f.out"
-echo "installed package: find_package and pkg-config builds run, and so does the Bullet host"
+echo "installed package: find_package and pkg-config builds run (static and shared), and so does the Bullet host"
