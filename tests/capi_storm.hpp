@@ -1,7 +1,8 @@
 #pragma once
 // A game's scene changing under the C API while the caller renders: a control thread spawning
 // and removing objects (about a thousand of each per second) from banks it loads and releases,
-// and a game thread posting impacts and moves to whichever objects are live. Shared by the
+// adding gravel to a third of them and taking some of it out again, and a game thread posting
+// impacts, moves and shakes to whichever objects and shakers are live. Shared by the
 // thread test (under ThreadSanitizer) and the allocation test (counting on the audio thread).
 #include <atomic>
 #include <chrono>
@@ -30,6 +31,7 @@ class CApiStorm {
 
   explicit CApiStorm(chladni_runtime* rt) : rt_(rt) {
     for (auto& id : live_) id.store(0);
+    for (auto& id : gravel_) id.store(0);
   }
   ~CApiStorm() { stop(); }
 
@@ -44,14 +46,16 @@ class CApiStorm {
   }
   /// Removes what is left and releases every bank (after stop()).
   void clear() {
+    for (auto& id : gravel_)
+      if (const uint64_t v = id.exchange(0)) note(chladni_shaker_remove(rt_, {v}), "remove shaker");
     for (auto& id : live_)
       if (const uint64_t v = id.exchange(0)) note(chladni_object_remove(rt_, {v}), "remove");
     for (chladni_bank b : banks_) note(chladni_bank_release(rt_, b), "release");
     banks_.clear();
   }
 
-  std::atomic<long> spawned{0}, removed{0}, loaded{0}, released{0}, impacts{0}, moves{0}, gone{0},
-      full{0};
+  std::atomic<long> spawned{0}, removed{0}, loaded{0}, released{0}, impacts{0}, moves{0}, shaken{0},
+      shakers_added{0}, shakers_removed{0}, gone{0}, full{0};
   std::string unexpected;  // the first status no caller should see (control thread's)
   std::atomic<bool> game_unexpected{false};
 
@@ -80,6 +84,7 @@ class CApiStorm {
     banks_ = {load(rng), load(rng), load(rng)};
     for (long n = 0; running_.load(); ++n) {
       std::atomic<uint64_t>& place = live_[n % kLive];
+      gravel_[n % kLive].store(0);  // goes with its object
       if (const uint64_t old = place.exchange(0)) {
         note(chladni_object_remove(rt_, {old}), "remove");
         ++removed;
@@ -91,10 +96,17 @@ class CApiStorm {
       if (s == CHLADNI_OK) {
         place.store(o.id);
         ++spawned;
+        if (n % 3 == 0) add_gravel(o, gravel_[n % kLive]);
       } else if (s == CHLADNI_QUEUE_FULL) {
         ++full;  // every place is alive or fading out: the audio thread is behind
       } else {
         note(s, "spawn");
+      }
+      if (n % 7 == 3) {  // some gravel taken out while its object plays on
+        if (const uint64_t g = gravel_[(n * 5) % kLive].exchange(0)) {
+          note(chladni_shaker_remove(rt_, {g}), "remove shaker");
+          ++shakers_removed;
+        }
       }
       if (n % 50 == 49) {  // a new bank in, the oldest given up while its objects play on
         note(chladni_bank_release(rt_, banks_.front()), "release");
@@ -105,6 +117,19 @@ class CApiStorm {
       std::this_thread::sleep_for(std::chrono::microseconds(900));
     }
   }
+  void add_gravel(chladni_object o, std::atomic<uint64_t>& into) {
+    const chladni_shaker_desc d{o, "gravel", 0, 1, 0};
+    chladni_shaker g{0};
+    const chladni_status s = chladni_shaker_add(rt_, &d, &g);
+    if (s == CHLADNI_OK) {
+      into.store(g.id);
+      ++shakers_added;
+    } else if (s == CHLADNI_QUEUE_FULL) {
+      ++full;
+    } else {
+      note(s, "add shaker");
+    }
+  }
   void game() {
     std::mt19937 rng(5);
     const double q[4] = {1, 0, 0, 0};
@@ -113,7 +138,12 @@ class CApiStorm {
       if (!id) continue;
       const double t = chladni_runtime_time(rt_) + 0.002;
       chladni_status s;
-      if (n % 2 == 0) {
+      if (n % 5 == 4) {
+        const uint64_t g = gravel_[rng() % kLive].load();
+        if (!g) continue;
+        s = chladni_shaker_shake(rt_, {g}, t, 0.5);
+        if (s == CHLADNI_OK) ++shaken;
+      } else if (n % 2 == 0) {
         chladni_impact im{};
         im.object = {id};
         im.time = t;
@@ -129,7 +159,7 @@ class CApiStorm {
         if (s == CHLADNI_OK) ++moves;
       }
       if (s == CHLADNI_INPUT_ERROR)
-        ++gone;  // removed after it was read: refused, as it must be
+        ++gone;  // removed after it was read (or its object was): refused, as it must be
       else if (s == CHLADNI_QUEUE_FULL)
         ++full;
       else if (s != CHLADNI_OK)
@@ -140,7 +170,7 @@ class CApiStorm {
 
   chladni_runtime* rt_;
   std::atomic<bool> running_{true};
-  std::atomic<uint64_t> live_[kLive];
+  std::atomic<uint64_t> live_[kLive], gravel_[kLive];
   std::vector<chladni_bank> banks_;
   std::thread control_, game_;
 };

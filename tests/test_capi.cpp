@@ -164,8 +164,8 @@ TEST(CApi, ShakesAsTheOfflineRendererDoes) {
   d.instrument = "maraca";
   d.resonate_object = 0;
   ASSERT_EQ(chladni_shaker_add(r.rt, &d, &shakers[1]), CHLADNI_OK) << chladni_last_error();
-  EXPECT_EQ(shakers[0].id, 1u);
-  EXPECT_EQ(shakers[1].id, 2u);
+  EXPECT_NE(shakers[0].id, 0u);
+  EXPECT_NE(shakers[1].id, shakers[0].id);
   ASSERT_EQ(chladni_shaker_shake(r.rt, shakers[0], gravel.time, gravel.energy), CHLADNI_OK);
   ASSERT_EQ(chladni_shaker_shake(r.rt, shakers[1], maraca.time, maraca.energy), CHLADNI_OK);
   ASSERT_EQ(chladni_shaker_shake(r.rt, shakers[0], again.time, again.energy), CHLADNI_OK);

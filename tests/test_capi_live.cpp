@@ -227,3 +227,57 @@ TEST(CApiLive, AnInstalledObjectWithTransferSoundsAsAnAddedOne) {
   EXPECT_GT(axis, 0.0);
   EXPECT_LT(side, axis);
 }
+
+TEST(CApiLive, ShakersComeAndGoWhileTheirObjectPlays) {
+  chladni_config c;
+  chladni_config_default(&c);
+  c.threads = 1;
+  c.max_shakers = 2;
+  chladni_runtime* rt = nullptr;
+  ASSERT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();
+  auto render = [&](uint32_t frames) {
+    std::vector<float> out(2 * frames);
+    EXPECT_EQ(chladni_runtime_render(rt, out.data(), frames), CHLADNI_OK) << chladni_last_error();
+    return out;
+  };
+  const chladni_bank bank = tone(rt, 700);
+  chladni_object bowl{0}, bar{0};
+  ASSERT_EQ(chladni_object_spawn(rt, bank, kAt, kIdentity, 1.0, &bowl), CHLADNI_OK);
+  ASSERT_EQ(chladni_object_spawn(rt, bank, kAt, kIdentity, 1.0, &bar), CHLADNI_OK);
+  const chladni_shaker_desc maraca{bowl, "maraca", 0, 0, 0}, gravel{bowl, "gravel", 0, 1, 0};
+  chladni_shaker a{0}, b{0}, extra{0};
+  ASSERT_EQ(chladni_shaker_add(rt, &maraca, &a), CHLADNI_OK) << chladni_last_error();
+  ASSERT_EQ(chladni_shaker_add(rt, &gravel, &b), CHLADNI_OK) << chladni_last_error();
+  // Both places taken: refused, not a stall.
+  EXPECT_EQ(chladni_shaker_add(rt, &maraca, &extra), CHLADNI_QUEUE_FULL);
+  EXPECT_TRUE(said("max_shakers (2)")) << chladni_last_error();
+  // Shaken while the audio plays, the maraca sounds.
+  ASSERT_EQ(chladni_shaker_shake(rt, a, 0.0, 1.0), CHLADNI_OK);
+  EXPECT_GT(chladni::test::max_abs(render(4800)), 0.0);
+  // Removed: its shakes are refused at once; it fades out over the gain ramp, then is silent,
+  // and its place takes a new shaker under a new handle.
+  ASSERT_EQ(chladni_shaker_shake(rt, a, chladni_runtime_time(rt), 1.0), CHLADNI_OK);
+  render(256);
+  ASSERT_EQ(chladni_shaker_remove(rt, a), CHLADNI_OK);
+  EXPECT_EQ(chladni_shaker_shake(rt, a, chladni_runtime_time(rt), 1.0), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_shaker_remove(rt, a), CHLADNI_INPUT_ERROR);
+  const std::vector<float> fade = render(256);
+  EXPECT_GT(chladni::test::max_abs(std::span(fade).first(64)), 0.0);  // no step to silence
+  EXPECT_EQ(chladni::test::max_abs(render(256)), 0.0);
+  ASSERT_EQ(chladni_shaker_add(rt, &maraca, &extra), CHLADNI_OK) << chladni_last_error();
+  EXPECT_EQ(chladni::capi::place_of(extra.id), chladni::capi::place_of(a.id));
+  EXPECT_NE(extra.id, a.id);
+  // The object's removal takes its shakers with it: their handles are refused, and once faded
+  // their places are free for the other object.
+  ASSERT_EQ(chladni_object_remove(rt, bowl), CHLADNI_OK);
+  EXPECT_EQ(chladni_shaker_shake(rt, b, chladni_runtime_time(rt), 1.0), CHLADNI_INPUT_ERROR);
+  render(512);
+  const chladni_shaker_desc at_bar{bar, "maraca", 0, 0, 0};
+  chladni_shaker c1{0}, c2{0};
+  ASSERT_EQ(chladni_shaker_add(rt, &at_bar, &c1), CHLADNI_OK) << chladni_last_error();
+  ASSERT_EQ(chladni_shaker_add(rt, &at_bar, &c2), CHLADNI_OK) << chladni_last_error();
+  EXPECT_EQ(chladni_shaker_remove(rt, b), CHLADNI_INPUT_ERROR);
+  ASSERT_EQ(chladni_shaker_shake(rt, c2, chladni_runtime_time(rt), 1.0), CHLADNI_OK);
+  EXPECT_GT(chladni::test::max_abs(render(2400)), 0.0);
+  chladni_runtime_destroy(rt);
+}

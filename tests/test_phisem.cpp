@@ -226,6 +226,39 @@ TEST(Phisem, PresetsAndParametersAreValidated) {
   EXPECT_TRUE(bank.shake(0, 0.5f, 10));
 }
 
+TEST(Phisem, RemovedVoicesGiveTheirSlotsAndIndexToLaterOnes) {
+  const ShakerVoice bells = instrument_voice(phisem_preset("sleighbells"), 48000);
+  const auto n = static_cast<uint32_t>(bells.resonances.size());
+  CpuFilterbank fb({.capacity = 2 * n, .channels = 1, .threads = 1});
+  ShakerBank bank(fb, {.sample_rate = 48000, .max_voices = 3, .reserve_all = true});
+  EXPECT_EQ(bank.add_voice(bells), 0);
+  EXPECT_EQ(bank.add_voice(bells), 1);
+  EXPECT_THROW(bank.add_voice(bells), InputError);  // every slot taken
+  std::vector<float> out(256);
+  EXPECT_TRUE(bank.shake(0, 1.0f, 0));
+  bank.render(256, out.data());
+  EXPECT_GT(test::max_abs(out), 0.0);
+  // Removed, a voice is silent at once and refuses shakes; its slots and index go to the next.
+  bank.remove_voice(0);
+  EXPECT_FALSE(bank.live(0));
+  EXPECT_FALSE(bank.shake(0, 1.0f, 0));
+  bank.render(256, out.data());
+  EXPECT_EQ(test::max_abs(out), 0.0);
+  auto again = ShakerBank::prepare_voice(bells);
+  EXPECT_FALSE(bank.add_voice(*again, 1));  // taken
+  EXPECT_TRUE(bank.add_voice(*again, 0));
+  // Two neighbouring runs freed merge: a voice of both their sizes fits.
+  bank.remove_voice(0);
+  bank.remove_voice(1);
+  ShakerVoice twice = bells;
+  twice.resonances.insert(twice.resonances.end(), bells.resonances.begin(), bells.resonances.end());
+  auto wide = ShakerBank::prepare_voice(twice);
+  EXPECT_TRUE(bank.add_voice(*wide, 1));
+  EXPECT_TRUE(bank.shake(1, 1.0f, 0));
+  bank.render(256, out.data());
+  EXPECT_GT(test::max_abs(out), 0.0);
+}
+
 namespace {
 
 // A few voices of several kinds (fixed, retuned, soundbank modes) over two seconds.

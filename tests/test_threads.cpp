@@ -70,7 +70,7 @@ chladni_runtime* make_runtime() {
   const chladni_shaker_desc gravel{first, "gravel", 0, 1, 0};
   chladni_shaker shaker{0};
   EXPECT_EQ(chladni_shaker_add(rt, &gravel, &shaker), CHLADNI_OK) << chladni_last_error();
-  EXPECT_EQ(shaker.id, 1u);
+  EXPECT_EQ(shaker.id, object_id(0));  // shaker place 0, generation 1
   return rt;
 }
 
@@ -106,7 +106,7 @@ void post(chladni_runtime* rt, int k) {
         break;
       }
       default:
-        s = chladni_shaker_shake(rt, chladni_shaker{1}, t, 0.3);
+        s = chladni_shaker_shake(rt, chladni_shaker{object_id(0)}, t, 0.3);
     }
     if (s == CHLADNI_QUEUE_FULL) std::this_thread::yield();
   }
@@ -211,9 +211,9 @@ TEST(Threads, ShakerExcitationOnWorkersGivesTheSamplesOfOneThread) {
 
 TEST(Threads, ObjectsSpawnAndGoWhileTheAudioThreadRenders) {
   // A control thread spawns and removes about a thousand objects a second, loading banks and
-  // releasing them while their objects still play; a game thread strikes and moves the live
-  // ones; this thread renders. Nothing waits on anything, and at the end every place and bank
-  // has been given back.
+  // releasing them while their objects still play, and adds and removes gravel in them; a game
+  // thread strikes, moves and shakes the live ones; this thread renders. Nothing waits on anything,
+  // and at the end every place and bank has been given back.
   chladni_runtime* rt = test::storm_runtime();
   ASSERT_NE(rt, nullptr) << chladni_last_error();
   test::CApiStorm storm(rt);
@@ -236,15 +236,20 @@ TEST(Threads, ObjectsSpawnAndGoWhileTheAudioThreadRenders) {
   EXPECT_GE(storm.released.load(), 19);
   EXPECT_GT(storm.impacts.load(), 100);
   EXPECT_GT(storm.moves.load(), 100);
+  EXPECT_GE(storm.shakers_added.load(), 300);
+  EXPECT_GE(storm.shakers_removed.load(), 20);
+  EXPECT_GT(storm.shaken.load(), 20);
   EXPECT_TRUE(finite);
   EXPECT_GT(peak, 0.0);
   // Removed, everything fades out within the gain ramp and is then silent.
   storm.clear();
+  EXPECT_EQ(storm.unexpected, "");
   for (int b = 0; b < 3; ++b) ASSERT_EQ(chladni_runtime_render(rt, out.data(), kBlock), CHLADNI_OK);
   EXPECT_EQ(max_abs(out), 0.0);
   rt->reclaim();  // this thread is the control thread now
   EXPECT_TRUE(rt->banks.empty());
   EXPECT_EQ(rt->free_places.size(), 64u);
+  EXPECT_EQ(rt->free_shaker_places.size(), 64u);
   EXPECT_EQ(rt->lost_returns, 0u);
   chladni_runtime_destroy(rt);
 }

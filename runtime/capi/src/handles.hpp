@@ -29,26 +29,29 @@ enum class Kind : uint8_t { Impact, Move, Listener, Shake };
 struct Command {
   Kind kind;
   uint64_t object;  // the object's handle id (a shaker's object for Shake)
-  uint32_t shaker;
+  uint64_t shaker;  // Shake: the shaker's handle id
   double time;
   double impulse, contact;  // impulse: a shake's energy
   int64_t vertex;
   double a[3], b[3], c[3], q[4];  // direction/point/-, position/forward/up, orientation
 };
 
-// Control -> audio: an object to place, or one to remove.
+// Control -> audio: an object or a shaker to place, or one to remove.
 struct Change {
-  enum class Kind : uint8_t { Spawn, Remove } kind;
+  enum class Kind : uint8_t { Spawn, Remove, AddShaker, RemoveShaker } kind;
   uint32_t place;
   uint64_t id;
-  runtime::ScenePlayer::PreparedObject* prepared;  // Spawn
+  uint64_t object = 0;                                       // AddShaker: its object's handle id
+  runtime::ScenePlayer::PreparedObject* prepared = nullptr;  // Spawn
+  runtime::ScenePlayer::PreparedShaker* shaker = nullptr;    // AddShaker
 };
 
-// Audio -> control: a place whose object has faded out, or storage to free.
+// Audio -> control: a place whose object or shaker has faded out, or storage to free.
 struct Return {
-  enum class Kind : uint8_t { Retired, Garbage, Refused } kind;
+  enum class Kind : uint8_t { Retired, Garbage, Refused, ShakerRetired, ShakerGarbage } kind;
   uint32_t place;
-  runtime::ScenePlayer::PreparedObject* prepared;  // Garbage, Refused
+  runtime::ScenePlayer::PreparedObject* prepared = nullptr;  // Garbage, Refused
+  runtime::ScenePlayer::PreparedShaker* shaker = nullptr;    // ShakerGarbage (also refused)
 };
 
 struct Bank {
@@ -70,9 +73,12 @@ struct Place {
   uint32_t generation = 0;
 };
 
-// A shaker, read by the game thread.
+// A shaker place. `id` and `object` are read by the game thread; the rest is the control
+// thread's.
 struct ShakerPlace {
-  std::atomic<uint64_t> object{0};
+  std::atomic<uint64_t> id{0};      // the live shaker's handle id (0: none)
+  std::atomic<uint64_t> object{0};  // its object's handle id
+  uint32_t generation = 0;
 };
 
 /// Records `message` as this thread's last error; returns `status`.
@@ -122,6 +128,10 @@ struct chladni_runtime {
   void apply_due(uint64_t t, uint32_t frames);
   uint32_t until_next_pose(uint32_t frames) const;
   uint64_t sample_of(const chladni::capi::Command& c) const;
+  uint32_t max_shakers() const { return config.shaker_slots ? config.max_shakers : 0; }
+  void give_back(const chladni::capi::Return& r) {
+    if (!returns.push(r)) ++lost_returns;  // sized so that it cannot fill
+  }
   bool installed(uint64_t object) const {
     const uint32_t k = chladni::capi::place_of(object);
     return k < installed_ids.size() && installed_ids[k] == object;
@@ -134,16 +144,16 @@ struct chladni_runtime {
   // Control thread.
   std::unordered_map<uint64_t, std::unique_ptr<chladni::capi::Bank>> banks;
   uint64_t next_bank = 1;
-  std::vector<uint32_t> free_places;
+  std::vector<uint32_t> free_places, free_shaker_places;
   // Shared.
   std::unique_ptr<chladni::capi::Place[]> places;
   std::unique_ptr<chladni::capi::ShakerPlace[]> shakers;
-  std::atomic<uint32_t> shaker_count{0};
   chladni::runtime::SpscQueue<chladni::capi::Command> queue;
   chladni::runtime::SpscQueue<chladni::capi::Change> changes;
   chladni::runtime::SpscQueue<chladni::capi::Return> returns;
   // Audio thread.
   std::vector<uint64_t> installed_ids;          // per place: the object installed there
+  std::vector<uint64_t> installed_shaker_ids;   // per shaker place: the shaker installed there
   std::vector<chladni::capi::Command> pending;  // drained commands, by time; capacity fixed
   uint64_t lost_returns = 0;                    // returns dropped on a full queue (a bug)
   uint64_t now = 0;                             // samples rendered (audio thread)

@@ -44,6 +44,15 @@ uint32_t live(const chladni_runtime* rt, chladni_object object) {
   return k;
 }
 
+// The place of a live shaker handle, for the game thread.
+uint32_t live_shaker(const chladni_runtime* rt, chladni_shaker shaker) {
+  const uint32_t s = capi::place_of(shaker.id);
+  if (shaker.id == 0 || s >= rt->max_shakers() ||
+      rt->shakers[s].id.load(std::memory_order_acquire) != shaker.id)
+    throw InputError("no shaker " + std::to_string(shaker.id) + " (never added, or removed)");
+  return s;
+}
+
 chladni_status post(chladni_runtime* rt, const Command& c) {
   return rt->queue.push(c) ? CHLADNI_OK
                            : capi::fail(CHLADNI_QUEUE_FULL, "the command queue is full");
@@ -69,12 +78,19 @@ void chladni_runtime::reclaim() {
     p.bank = nullptr;
     free_places.push_back(k);
   };
+  auto vacate_shaker = [&](uint32_t s) {
+    capi::ShakerPlace& p = shakers[s];
+    uint64_t expected = capi::handle_id(s, p.generation);
+    p.id.compare_exchange_strong(expected, 0);  // gone with its object, or never placed
+    free_shaker_places.push_back(s);
+  };
   while (const Return* r = returns.front()) {
     const Return ret = *r;
     returns.pop();
-    if (ret.kind == Return::Kind::Retired) vacate(ret.place);
-    if (ret.kind == Return::Kind::Refused) vacate(ret.place);
+    if (ret.kind == Return::Kind::Retired || ret.kind == Return::Kind::Refused) vacate(ret.place);
+    if (ret.kind == Return::Kind::ShakerRetired) vacate_shaker(ret.place);
     delete ret.prepared;
+    delete ret.shaker;
   }
 }
 
@@ -113,7 +129,9 @@ chladni_status chladni_object_spawn(chladni_runtime* rt, chladni_bank bank,
     capi::Place& p = rt->places[k];
     const uint32_t generation = p.generation + 1 == 0 ? 1 : p.generation + 1;  // id 0 is none
     const uint64_t id = capi::handle_id(k, generation);
-    if (!rt->changes.push({capi::Change::Kind::Spawn, k, id, prepared.get()}))
+    capi::Change ch{capi::Change::Kind::Spawn, k, id};
+    ch.prepared = prepared.get();
+    if (!rt->changes.push(ch))
       throw InternalError("the change queue is full");  // sized for every place: a bug
     prepared.release();  // the audio thread hands it back through `returns`
     rt->free_places.pop_back();
@@ -133,7 +151,7 @@ chladni_status chladni_object_remove(chladni_runtime* rt, chladni_object object)
     if (!rt) throw InputError("runtime must not be null");
     rt->reclaim();
     const uint32_t k = live(rt, object);
-    if (!rt->changes.push({capi::Change::Kind::Remove, k, object.id, nullptr}))
+    if (!rt->changes.push({capi::Change::Kind::Remove, k, object.id}))
       throw InternalError("the change queue is full");
     rt->places[k].id.store(0, std::memory_order_release);  // commands are refused from now on
     return CHLADNI_OK;
@@ -150,14 +168,17 @@ chladni_status chladni_shaker_add(chladni_runtime* rt, const chladni_shaker_desc
     const uint32_t k = live(rt, desc->object);
     if (rt->config.shaker_slots == 0)
       throw InputError("the runtime was created with shaker_slots = 0: no room for shakers");
-    if (rt->player->shaker_count() >= rt->config.max_shakers)
-      throw InputError("max_shakers (" + std::to_string(rt->config.max_shakers) + ") reached");
     if (!(desc->particles >= 0 && desc->particles <= 1e6))
       throw InputError("particles must be in [0, 1e6]");
     if (!(desc->impulse >= 0 && desc->impulse <= 1e3))
       throw InputError("impulse must be in [0, 1e3] N s");
-    // The object's spawn must have reached the player: its shaker rings its voice.
-    rt->take_changes();
+    if (rt->free_shaker_places.empty()) {
+      capi::fail(CHLADNI_QUEUE_FULL, "chladni_shaker_add: max_shakers (" +
+                                         std::to_string(rt->config.max_shakers) +
+                                         ") shakers are alive or fading out");
+      return CHLADNI_QUEUE_FULL;
+    }
+    const uint32_t s = rt->free_shaker_places.back();
     ShakeEvent ev;
     ev.json_path = "shaker";
     ev.object = k;
@@ -165,13 +186,36 @@ chladni_status chladni_shaker_add(chladni_runtime* rt, const chladni_shaker_desc
     ev.particles = desc->particles;
     ev.resonate_object = desc->resonate_object != 0;
     if (desc->impulse > 0) ev.impulse = desc->impulse;
-    const std::size_t n = rt->player->shaker_count();
+    // Seeded by place, as the offline player seeds its k-th shaker.
     const ShakerVoice voice =
-        shake_voice(ev, rt->places[k].bank->modes, rt->config.sample_rate, 1 + n);
-    const int s = rt->player->add_shaker(k, voice, ev.resonate_object);
-    rt->shakers[s].object.store(desc->object.id, std::memory_order_relaxed);
-    rt->shaker_count.store(static_cast<uint32_t>(s + 1), std::memory_order_release);
-    *shaker = chladni_shaker{static_cast<uint64_t>(s) + 1};
+        shake_voice(ev, rt->places[k].bank->modes, rt->config.sample_rate, 1 + s);
+    std::unique_ptr<ScenePlayer::PreparedShaker> prepared =
+        rt->player->prepare_shaker(voice, ev.resonate_object);
+    capi::ShakerPlace& p = rt->shakers[s];
+    const uint32_t generation = p.generation + 1 == 0 ? 1 : p.generation + 1;
+    const uint64_t id = capi::handle_id(s, generation);
+    capi::Change ch{capi::Change::Kind::AddShaker, s, id};
+    ch.object = desc->object.id;
+    ch.shaker = prepared.get();
+    if (!rt->changes.push(ch)) throw InternalError("the change queue is full");
+    prepared.release();  // the audio thread hands it back through `returns`
+    rt->free_shaker_places.pop_back();
+    p.generation = generation;
+    p.object.store(desc->object.id, std::memory_order_relaxed);
+    p.id.store(id, std::memory_order_release);
+    *shaker = chladni_shaker{id};
+    return CHLADNI_OK;
+  });
+}
+
+chladni_status chladni_shaker_remove(chladni_runtime* rt, chladni_shaker shaker) {
+  return capi::guarded("chladni_shaker_remove", [&] {
+    if (!rt) throw InputError("runtime must not be null");
+    rt->reclaim();
+    const uint32_t s = live_shaker(rt, shaker);
+    if (!rt->changes.push({capi::Change::Kind::RemoveShaker, s, shaker.id}))
+      throw InternalError("the change queue is full");
+    rt->shakers[s].id.store(0, std::memory_order_release);  // shakes are refused from now on
     return CHLADNI_OK;
   });
 }
@@ -180,9 +224,7 @@ chladni_status chladni_shaker_shake(chladni_runtime* rt, chladni_shaker shaker, 
                                     double energy) {
   return capi::guarded("chladni_shaker_shake", [&] {
     if (!rt) throw InputError("runtime must not be null");
-    if (shaker.id == 0 || shaker.id > rt->shaker_count.load(std::memory_order_acquire))
-      throw InputError("no shaker " + std::to_string(shaker.id));
-    const uint32_t s = static_cast<uint32_t>(shaker.id - 1);
+    const uint32_t s = live_shaker(rt, shaker);
     const chladni_object object{rt->shakers[s].object.load(std::memory_order_relaxed)};
     live(rt, object);
     rt->check_time(time);
@@ -190,7 +232,7 @@ chladni_status chladni_shaker_shake(chladni_runtime* rt, chladni_shaker shaker, 
     Command c{};
     c.kind = Kind::Shake;
     c.object = object.id;
-    c.shaker = s;
+    c.shaker = shaker.id;
     c.time = time;
     c.impulse = energy;
     return post(rt, c);

@@ -74,9 +74,9 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
       places(std::make_unique<capi::Place[]>(c.max_objects)),
       shakers(std::make_unique<capi::ShakerPlace[]>(c.shaker_slots ? c.max_shakers : 0)),
       queue(c.queue_capacity),
-      // Each place has at most a spawn and a removal in flight, and as many returns.
-      changes(2 * std::size_t{c.max_objects}),
-      returns(2 * std::size_t{c.max_objects} + 2) {
+      // Each place has at most an addition and a removal in flight, and as many returns.
+      changes(2 * (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0))),
+      returns(2 * (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0)) + 2) {
   PlayerOptions po;
   po.sample_rate = c.sample_rate;
   po.synth.sample_rate = c.sample_rate;
@@ -89,42 +89,62 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
   player->finish_objects();  // the shared tables, empty: live objects carry their own
   pending.reserve(queue.capacity());
   installed_ids.assign(c.max_objects, 0);
+  installed_shaker_ids.assign(max_shakers(), 0);
   free_places.reserve(c.max_objects);
   for (uint32_t k = c.max_objects; k-- > 0;) free_places.push_back(k);
+  free_shaker_places.reserve(max_shakers());
+  for (uint32_t k = max_shakers(); k-- > 0;) free_shaker_places.push_back(k);
 }
 
 chladni_runtime::~chladni_runtime() {
   // Nothing renders now: whatever is still in flight is freed here.
   while (const capi::Change* c = changes.front()) {
     delete c->prepared;
+    delete c->shaker;
     changes.pop();
   }
   while (const capi::Return* r = returns.front()) {
     delete r->prepared;
+    delete r->shaker;
     returns.pop();
   }
   player.reset();  // before the banks its objects point into
 }
 
-// Places the control thread's new objects and removes the ones it removed.
+// Places the control thread's new objects and shakers and removes the ones it removed.
 void chladni_runtime::take_changes() {
+  using capi::Change;
   using capi::Return;
-  auto give_back = [&](const Return& r) {
-    if (!returns.push(r)) ++lost_returns;  // sized so that it cannot fill
-  };
-  while (const capi::Change* c = changes.front()) {
-    const capi::Change ch = *c;
+  while (const Change* c = changes.front()) {
+    const Change ch = *c;
     changes.pop();
-    if (ch.kind == capi::Change::Kind::Spawn) {
-      if (player->install(ch.place, *ch.prepared)) {
-        installed_ids[ch.place] = ch.id;
-        give_back({Return::Kind::Garbage, ch.place, ch.prepared});
-      } else {
-        give_back({Return::Kind::Refused, ch.place, ch.prepared});
-      }
-    } else if (installed_ids[ch.place] == ch.id) {
-      player->remove(ch.place);
-      installed_ids[ch.place] = 0;
+    switch (ch.kind) {
+      case Change::Kind::Spawn:
+        if (player->install(ch.place, *ch.prepared)) {
+          installed_ids[ch.place] = ch.id;
+          give_back({Return::Kind::Garbage, ch.place, ch.prepared});
+        } else {
+          give_back({Return::Kind::Refused, ch.place, ch.prepared});
+        }
+        break;
+      case Change::Kind::Remove:
+        if (installed_ids[ch.place] == ch.id) {
+          player->remove(ch.place);
+          installed_ids[ch.place] = 0;
+        }
+        break;
+      case Change::Kind::AddShaker:
+        if (installed(ch.object) && player->install_shaker(static_cast<int>(ch.place),
+                                                           capi::place_of(ch.object), *ch.shaker)) {
+          installed_shaker_ids[ch.place] = ch.id;
+          give_back({Return::Kind::ShakerGarbage, ch.place, nullptr, ch.shaker});
+        } else {  // its object went first: the place is free again at once
+          give_back({Return::Kind::ShakerRetired, ch.place, nullptr, ch.shaker});
+        }
+        break;
+      case Change::Kind::RemoveShaker:
+        if (installed_shaker_ids[ch.place] == ch.id) player->remove_shaker(int(ch.place));
+        break;
     }
   }
 }
@@ -181,9 +201,10 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
     if (c.kind != Kind::Shake) return false;
     const uint64_t at = sample_of(c);
     if (at >= t + frames) return false;
-    if (!installed(c.object)) return true;
+    const uint32_t s = capi::place_of(c.shaker);
+    if (s >= installed_shaker_ids.size() || installed_shaker_ids[s] != c.shaker) return true;
     // false: the block's shake list is full; it waits for the next block.
-    return player->shake(static_cast<int>(c.shaker), static_cast<float>(c.impulse),
+    return player->shake(static_cast<int>(s), static_cast<float>(c.impulse),
                          at <= t ? 0u : static_cast<uint32_t>(at - t));
   });
   keep_if([&](const Command& c) {
@@ -255,8 +276,11 @@ chladni_status chladni_runtime_render(chladni_runtime* rt, float* out, uint32_t 
       frames -= n;
       rt->now += n;
     }
-    for (uint32_t k : rt->player->retired())
-      if (!rt->returns.push({capi::Return::Kind::Retired, k, nullptr})) ++rt->lost_returns;
+    for (uint32_t k : rt->player->retired()) rt->give_back({capi::Return::Kind::Retired, k});
+    for (uint32_t k : rt->player->retired_shakers()) {
+      rt->installed_shaker_ids[k] = 0;
+      rt->give_back({capi::Return::Kind::ShakerRetired, k});
+    }
     rt->player->clear_retired();
     rt->clock.store(rt->now, std::memory_order_release);
     return CHLADNI_OK;

@@ -8,13 +8,10 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/random.hpp"
-#include "chladni/gpu/buffer.hpp"
 #include "chladni/gpu/context.hpp"
-#include "chladni/gpu/pipeline.hpp"
-#include "chladni/gpu/sequence.hpp"
-#include "chladni/kernels/phisem.spv.h"
 #include "chladni/runtime/filterbank/gpu_filterbank.hpp"
 #include "chladni/runtime/modal/object_modes.hpp"
+#include "shaker_gpu_stage.hpp"
 
 namespace chladni::runtime {
 namespace {
@@ -98,36 +95,6 @@ ShakerVoice object_voice(const PhisemPreset& preset, const ObjectModes& object, 
   return v;
 }
 
-// The GPU excitation: parameters and states in mapped buffers, one dispatch per block recorded
-// into the GPU filterbank's submission ahead of its kernel.
-class ShakerBank::GpuStage final : public GpuInputStage {
- public:
-  GpuStage(GpuFilterbank& fb, uint32_t max_voices, uint32_t max_shakes) : fb_(fb) {
-    gpu::Context& c = fb.context();
-    params = std::make_unique<gpu::Buffer>(c, uint64_t{max_voices} * 32, gpu::Memory::HostVisible);
-    states = std::make_unique<gpu::Buffer>(c, uint64_t{max_voices} * 32, gpu::Memory::HostVisible);
-    shakes =
-        std::make_unique<gpu::Buffer>(c, uint64_t{max_shakes + 1} * 16, gpu::Memory::HostVisible);
-    pipeline = std::make_unique<gpu::Pipeline>(c, std::span(k_phisem_spv), 4, 16);
-    pipeline->bind(0, *params);
-    pipeline->bind(1, *states);
-    pipeline->bind(2, *shakes);
-    pipeline->bind(3, fb.input_buffer());
-  }
-  void record(gpu::Sequence& seq, uint32_t frames) override {
-    const uint32_t push[4] = {voices, frames, shake_count, 0};
-    seq.dispatch(*pipeline, (voices + 63) / 64, push, sizeof(push));
-  }
-  PhisemParams* param_data() { return static_cast<PhisemParams*>(params->data()); }
-  PhisemState* state_data() { return static_cast<PhisemState*>(states->data()); }
-  uint32_t* shake_data() { return static_cast<uint32_t*>(shakes->data()); }
-
-  GpuFilterbank& fb_;
-  std::unique_ptr<gpu::Buffer> params, states, shakes;
-  std::unique_ptr<gpu::Pipeline> pipeline;
-  uint32_t voices = 0, shake_count = 0;
-};
-
 ShakerBank::ShakerBank(Filterbank& fb, const ShakerBankOptions& o) : fb_(fb), opt_(o) {
   static_assert(sizeof(PhisemParams) == 32, "matches kernels/phisem.comp");
   static_assert(sizeof(PhisemState) == 32, "matches kernels/phisem.comp");
@@ -136,6 +103,7 @@ ShakerBank::ShakerBank(Filterbank& fb, const ShakerBankOptions& o) : fb_(fb), op
   if (o.max_voices == 0) throw InputError("a shaker bank needs max_voices > 0");
   voices_.reserve(o.max_voices);
   params_.reserve(o.max_voices);
+  free_runs_.reserve(std::size_t{o.max_voices} + 1);
   shakes_.resize(o.max_shakes);
   if (o.excitation == ExcitationBackend::Gpu) {
     GpuFilterbank* gfb = fb.device();
@@ -150,6 +118,7 @@ ShakerBank::ShakerBank(Filterbank& fb, const ShakerBankOptions& o) : fb_(fb), op
     backend_name_ = "gpu";
   } else {
     states_.reserve(o.max_voices);
+    if (o.reserve_all) input_.reserve(std::size_t{o.max_voices} * fb.max_frames());
     const int threads =
         o.threads > 0 ? o.threads : std::max(1, int(std::thread::hardware_concurrency()));
     pool_ = std::make_unique<ThreadPool>(threads);
@@ -161,76 +130,30 @@ ShakerBank::ShakerBank(Filterbank& fb, const ShakerBankOptions& o) : fb_(fb), op
 }
 
 ShakerBank::~ShakerBank() {
-  if (gpu_) gpu_->fb_.set_input_stage(nullptr);
+  if (gpu_) gpu_->fb_.set_input_stage(nullptr);  // before the stage goes
   for (uint32_t s = lease_.begin; s < slot_end_; ++s) fb_.clear_mode(s);
   fb_.set_used(lease_, 0);
   fb_.release(lease_);
 }
 
 int ShakerBank::add_voice(const ShakerVoice& sv) {
-  if (voices_.size() >= opt_.max_voices)
+  std::unique_ptr<PreparedVoice> p = prepare_voice(sv);
+  uint32_t index = 0;
+  while (index < voices_.size() && voices_[index].live) ++index;
+  if (index >= opt_.max_voices)
     throw InputError("shaker bank is full (" + std::to_string(opt_.max_voices) + " voices)");
-  const std::size_t n = sv.resonances.size();
-  if (n == 0) throw InputError("voice '" + sv.name + "' has no resonances");
-  if (uint64_t{slot_end_} + n > lease_.end) {
-    throw InputError("voice '" + sv.name + "' needs " + std::to_string(n) +
-                     " filterbank slots; only " + std::to_string(lease_.end - slot_end_) +
-                     " are left");
+  if (!add_voice(*p, index)) {
+    uint32_t room = lease_.end - slot_end_;
+    for (const auto& run : free_runs_) room = std::max(room, run.second);
+    throw InputError("voice '" + sv.name + "' needs " + std::to_string(sv.resonances.size()) +
+                     " filterbank slots; only " + std::to_string(room) + " are left");
   }
-  const PhisemParams& p = sv.excitation;
-  for (float x : {p.system_decay, p.sound_decay, p.collision_probability, p.gain, p.eq[0], p.eq[1],
-                  p.eq[2], sv.pan[0], sv.pan[1]}) {
-    if (!std::isfinite(x)) throw InputError("voice '" + sv.name + "': non-finite parameter");
-  }
-  for (std::size_t i = 0; i < n; ++i) {
-    const ShakerResonance& r = sv.resonances[i];
-    if (!(std::isfinite(r.omega_d) && std::isfinite(r.decay) && r.decay >= 0 && finite(r.input) &&
-          std::isfinite(r.gain) && std::isfinite(r.vary) && std::isfinite(r.sweep) && r.sweep > 0))
-      throw InputError("voice '" + sv.name + "': resonance " + std::to_string(i) +
-                       " has a non-finite or negative value");
-  }
-  for (const auto& c : sv.contacts) {
-    if (c.size() != n) throw InputError("voice '" + sv.name + "': contact gains per resonance");
-    for (auto x : c)
-      if (!finite(x)) throw InputError("voice '" + sv.name + "': non-finite contact gain");
-  }
-  const uint32_t index = static_cast<uint32_t>(voices_.size());
-  Voice v;
-  v.first_slot = slot_end_;
-  v.res = sv.resonances;
-  v.contacts = sv.contacts;
-  for (const ShakerResonance& r : v.res) {
-    v.base_hz.push_back(r.omega_d / kTwoPi);
-    v.varies = v.varies || r.vary != 0 || r.sweep != 1;
-  }
-  v.hz = v.base_hz;
-  for (std::size_t i = 0; i < n; ++i) {
-    const ShakerResonance& r = v.res[i];
-    const float g[2] = {r.gain * sv.pan[0], r.gain * sv.pan[1]};
-    const uint32_t slot = v.first_slot + static_cast<uint32_t>(i);
-    fb_.set_mode(slot, pole(r.omega_d, r.decay, opt_.sample_rate), g);
-    fb_.set_input(slot, index, v.contacts.empty() ? r.input : v.contacts[0][i]);
-  }
-  slot_end_ += static_cast<uint32_t>(n);
-  fb_.set_used(lease_, slot_end_ - lease_.begin);
-  PhisemState st;
-  st.key = phisem_key(opt_.seed, index);
-  if (gpu_) {
-    gpu_->param_data()[index] = p;
-    gpu_->state_data()[index] = st;
-    gpu_->voices = index + 1;
-  } else {
-    states_.push_back(st);
-    input_.resize(std::size_t(index + 1) * fb_.max_frames());
-  }
-  params_.push_back(p);
-  voices_.push_back(std::move(v));
   return static_cast<int>(index);
 }
 
 bool ShakerBank::shake(int voice, float amount, uint32_t offset) {
-  if (voice < 0 || voice >= static_cast<int>(voices_.size()) || !std::isfinite(amount) ||
-      amount < 0 || offset >= fb_.max_frames() || shake_count_ >= shakes_.size())
+  if (!live(voice) || !std::isfinite(amount) || amount < 0 || offset >= fb_.max_frames() ||
+      shake_count_ >= shakes_.size())
     return false;
   shakes_[shake_count_++] = Shake{static_cast<uint32_t>(voice), offset, amount};
   return true;

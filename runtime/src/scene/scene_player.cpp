@@ -24,6 +24,7 @@ std::unique_ptr<ShakerBank> make_bank(Filterbank& fb, const PlayerOptions& o) {
   bo.slots = o.shaker_slots;
   bo.max_voices = o.max_shakers;
   bo.seed = o.seed;
+  bo.reserve_all = o.max_objects > 0;  // a live scene: voices come and go while it plays
   // A pipelined device takes no input stage: the particles are then made on the CPU.
   bo.excitation =
       fb.device() && !fb.device()->pipelined() ? ExcitationBackend::Gpu : ExcitationBackend::Cpu;
@@ -36,6 +37,7 @@ ScenePlayer::ScenePlayer(Filterbank& fb, const PlayerOptions& o)
     : fb_(fb), opt_(o), bank_(make_bank(fb, o)), synth_(fb, o.synth) {
   if (!std::isfinite(o.gain)) throw InputError("scene gain must be finite");
   shakers_.reserve(o.max_shakers);
+  retired_shakers_.reserve(o.max_shakers);
   objects_.reserve(o.max_objects);
   retired_.reserve(o.max_objects);
 }
@@ -148,17 +150,75 @@ std::string ScenePlayer::gain_backend() const {
   return table_.mode_count() == 0 ? "" : gpu_gains_ ? "gpu" : "cpu";
 }
 
-int ScenePlayer::add_shaker(std::size_t object, const ShakerVoice& voice, bool resonate) {
+std::unique_ptr<ScenePlayer::PreparedShaker> ScenePlayer::prepare_shaker(const ShakerVoice& voice,
+                                                                         bool resonate) const {
   if (!bank_) throw InputError("the player has no room for shakers (shaker_slots)");
+  auto p = std::make_unique<PreparedShaker>();
+  p->voice = ShakerBank::prepare_voice(voice);
+  p->shaker.resonate = resonate;
+  p->shaker.flat.assign(voice.resonances.size(), 0.0f);
+  return p;
+}
+
+bool ScenePlayer::install_shaker(int k, std::size_t object, PreparedShaker& p) {
+  if (!bank_ || k < 0 || static_cast<std::size_t>(k) > shakers_.size() ||
+      static_cast<std::size_t>(k) >= shakers_.capacity() || object >= objects_.size() ||
+      objects_[object].voice < 0)
+    return false;
+  if (static_cast<std::size_t>(k) < shakers_.size() && (!shakers_[k].dead || shakers_[k].fading))
+    return false;
+  if (p.shaker.resonate && p.shaker.flat.size() != objects_[object].modes.modes.size())
+    return false;
+  if (bank_->live(k) || !bank_->add_voice(*p.voice, static_cast<uint32_t>(k))) return false;
+  p.shaker.object = object;
+  p.shaker.dead = false;
+  p.shaker.fading = false;
+  if (static_cast<std::size_t>(k) == shakers_.size())
+    shakers_.push_back(std::move(p.shaker));  // within the reserved capacity
+  else
+    std::swap(shakers_[k], p.shaker);
+  dirty_ = true;
+  return true;
+}
+
+int ScenePlayer::add_shaker(std::size_t object, const ShakerVoice& voice, bool resonate) {
   const Object& o = objects_.at(object);
   if (o.voice < 0) throw InputError("object " + std::to_string(object) + " was removed");
   if (resonate && voice.resonances.size() != o.modes.modes.size())
     throw InternalError("player: a resonating shaker needs one resonance per mode");
-  const int k = bank_->add_voice(voice);
-  shakers_.push_back({object, resonate, voice.resonances.size(), false});
-  flat_.resize(std::max(flat_.size(), voice.resonances.size()));
-  dirty_ = true;
+  std::unique_ptr<PreparedShaker> p = prepare_shaker(voice, resonate);
+  const int k = static_cast<int>(shakers_.size());
+  if (static_cast<uint32_t>(k) >= opt_.max_shakers)
+    throw InputError("shaker bank is full (" + std::to_string(opt_.max_shakers) + " voices)");
+  if (!install_shaker(k, object, *p))
+    throw InputError("voice '" + voice.name + "' needs " + std::to_string(voice.resonances.size()) +
+                     " filterbank slots; the shakers' slots are full");
   return k;
+}
+
+void ScenePlayer::remove_shaker(int k) {
+  if (k < 0 || static_cast<std::size_t>(k) >= shakers_.size()) return;
+  Shaker& sh = shakers_[k];
+  if (sh.dead) return;
+  sh.dead = true;
+  apply_shaker_gains(k);  // its gains ramp to zero
+  sh.fading = true;
+  sh.fade_end = synth_.time() + fb_.gain_ramp();
+  ++shakers_fading_;
+  if (fb_.gain_ramp() == 0) end_shaker_fades();
+}
+
+// Removes the voices of the shakers whose fade has ended.
+void ScenePlayer::end_shaker_fades() {
+  for (std::size_t k = 0; shakers_fading_ > 0 && k < shakers_.size(); ++k) {
+    Shaker& sh = shakers_[k];
+    if (!sh.fading || synth_.time() < sh.fade_end) continue;
+    bank_->remove_voice(static_cast<int>(k));
+    sh.fading = false;
+    --shakers_fading_;
+    if (retired_shakers_.size() < retired_shakers_.capacity())
+      retired_shakers_.push_back(static_cast<uint32_t>(k));
+  }
 }
 
 bool ScenePlayer::shake(int k, float energy, uint32_t offset) {
@@ -168,15 +228,15 @@ bool ScenePlayer::shake(int k, float energy, uint32_t offset) {
 }
 
 void ScenePlayer::apply_shaker_gains(int k) {
-  const Shaker& sh = shakers_[k];
+  Shaker& sh = shakers_[k];
   const Object& o = objects_[sh.object];
   if (o.voice < 0 || sh.dead) {  // removed: a zero pan silences every resonance
-    bank_->set_gains(k, std::span(flat_).first(sh.resonances), 0, 0);
+    bank_->set_gains(k, sh.flat, 0, 0);
   } else if (sh.resonate) {
     bank_->set_gains(k, o.gains, o.pan[0], o.pan[1]);
   } else {
-    std::fill(flat_.begin(), flat_.end(), static_cast<float>(o.spread));
-    bank_->set_gains(k, std::span(flat_).first(sh.resonances), o.pan[0], o.pan[1]);
+    std::fill(sh.flat.begin(), sh.flat.end(), static_cast<float>(o.spread));
+    bank_->set_gains(k, sh.flat, o.pan[0], o.pan[1]);
   }
 }
 
@@ -203,10 +263,7 @@ void ScenePlayer::remove(std::size_t k) {
   }
   o.voice = -1;
   for (std::size_t s = 0; s < shakers_.size(); ++s)
-    if (shakers_[s].object == k && !shakers_[s].dead) {
-      shakers_[s].dead = true;
-      apply_shaker_gains(static_cast<int>(s));
-    }
+    if (shakers_[s].object == k && !shakers_[s].dead) remove_shaker(static_cast<int>(s));
 }
 
 void ScenePlayer::set_listener(const Listener& listener) {
@@ -285,6 +342,7 @@ void ScenePlayer::render(uint32_t frames, float* out) {
   const DriveInput drive = bank_ ? bank_->prepare(frames) : DriveInput{};
   synth_.render(frames, out, drive);
   if (bank_) bank_->finish(frames);
+  if (shakers_fading_ > 0) end_shaker_fades();
   for (std::size_t k = 0; fading_ > 0 && k < objects_.size(); ++k) {
     Object& o = objects_[k];
     if (o.fading >= 0 && synth_.time() >= o.fade_end) {

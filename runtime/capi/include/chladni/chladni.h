@@ -4,16 +4,16 @@
  * it. Names follow chladni_<noun>_<verb>.
  *
  * Threads. Three roles, each on one thread at a time (control and game may be the same thread):
- *  - control: chladni_runtime_create/destroy, the chladni_bank_* calls, chladni_object_spawn and
- *    chladni_object_remove. These allocate and may run while the audio thread renders: a new
- *    object is made here and handed to the audio thread through a queue, placed at the next
- *    block boundary; a removed one fades out there and is freed here afterwards.
+ *  - control: chladni_runtime_create/destroy, the chladni_bank_* calls, chladni_object_spawn,
+ *    chladni_object_remove, chladni_shaker_add and chladni_shaker_remove. These allocate and
+ *    (but create/destroy) may run while the audio thread renders: a new object or shaker is made
+ *    here and handed to the audio thread through a queue, placed at the next block boundary; a
+ *    removed one fades out there and is freed here afterwards.
  *  - game: chladni_impact_post, chladni_object_move, chladni_listener_set and
  *    chladni_shaker_shake. Lock-free and allocation-free; they reach the audio thread through a
  *    single-producer single-consumer queue.
  *  - audio: chladni_runtime_render. It never allocates, locks or waits (beyond the filterbank's
  *    own work).
- *  chladni_shaker_add is a control call that must not run while chladni_runtime_render does.
  *  chladni_runtime_time, chladni_runtime_latency and chladni_last_error may be called anywhere.
  *
  * Lifetimes. The runtime owns every bank and object. chladni_bank_release gives up the caller's
@@ -168,11 +168,14 @@ typedef struct chladni_shaker_desc {
   double impulse;         /* N s per unit of excitation on the surface (resonate_object); 0: 1e-3 */
 } chladni_shaker_desc;
 
-/* Adds a shaker, silent until shaken. Its sound follows its object's pose and ends for good
- * when the object is removed (max_shakers counts every shaker added). Control call that must not
- * run while chladni_runtime_render does. */
+/* Adds a shaker, silent until shaken, from the next block. Its sound follows its object's pose;
+ * it fades out and is freed when removed or when its object is. CHLADNI_QUEUE_FULL when
+ * max_shakers shakers are alive or fading out. Control call. */
 chladni_status chladni_shaker_add(chladni_runtime* runtime, const chladni_shaker_desc* desc,
                                   chladni_shaker* shaker);
+/* Fades a shaker out over gain_ramp samples and frees it; its shakes are refused from now on.
+ * Control call. */
+chladni_status chladni_shaker_remove(chladni_runtime* runtime, chladni_shaker shaker);
 /* Shakes: adds `energy` (0 to 1] to the particles at `time`. Game thread, as the other
  * commands. */
 chladni_status chladni_shaker_shake(chladni_runtime* runtime, chladni_shaker shaker, double time,

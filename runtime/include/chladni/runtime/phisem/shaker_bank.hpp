@@ -9,8 +9,9 @@
 // The excitation is made on the CPU (phisem_generate) or by kernels/phisem.comp inside the GPU
 // filterbank's submission; both give the same samples for the same seed.
 //
-// Threading: add_voice() allocates and belongs on a control thread; shake(), prepare(), finish()
-// and render() neither allocate nor lock.
+// Threading: add_voice(const ShakerVoice&) and prepare_voice() allocate and belong on a control
+// thread; add_voice(PreparedVoice&, index) (with reserve_all), remove_voice(), shake(),
+// prepare(), finish() and render() neither allocate nor lock.
 #include <complex>
 #include <cstdint>
 #include <memory>
@@ -62,6 +63,9 @@ struct ShakerBankOptions {
   uint64_t seed = 1;
   ExcitationBackend excitation = ExcitationBackend::Cpu;  ///< Gpu needs a GpuFilterbank
   int threads = 1;  ///< CPU excitation threads (0: all hardware threads)
+  /// Reserve every voice's storage at construction, so that add_voice(PreparedVoice&) never
+  /// allocates (a live scene's voices come and go while it plays).
+  bool reserve_all = false;
 };
 
 class ShakerBank {
@@ -76,6 +80,20 @@ class ShakerBank {
   /// Adds a voice (silent until shaken). Throws InputError on non-finite values or when the
   /// filterbank or max_voices is full.
   int add_voice(const ShakerVoice& voice);
+  /// A voice validated and built off the audio thread; add_voice(PreparedVoice&) places it.
+  struct PreparedVoice;
+  /// Throws InputError naming the voice on non-finite values or no resonances.
+  static std::unique_ptr<PreparedVoice> prepare_voice(const ShakerVoice& voice);
+  /// Places a prepared voice at `index` (a removed voice's, or voice_count()) on a run of free
+  /// slots, without allocating; `prepared` receives what the index held before. False when the
+  /// index is taken or beyond max_voices, or no run of slots is long enough.
+  bool add_voice(PreparedVoice& prepared, uint32_t index);
+  /// Silences a voice at once (fade its gains first), frees its slots for later voices and its
+  /// index for add_voice(PreparedVoice&), and drops its pending shakes.
+  void remove_voice(int voice) noexcept;
+  bool live(int voice) const {
+    return voice >= 0 && static_cast<std::size_t>(voice) < voices_.size() && voices_[voice].live;
+  }
   /// Adds `amount` (0-1) of energy to a voice at sample `offset` of the next block. Returns false
   /// (and drops it) when the block's shake list is full or the input is invalid.
   bool shake(int voice, float amount, uint32_t offset);
@@ -100,6 +118,8 @@ class ShakerBank {
 
  private:
   struct Voice {
+    bool live = false;
+    float pan[2] = {1, 1};
     uint32_t first_slot = 0;
     std::vector<ShakerResonance> res;
     std::vector<double> base_hz, hz;  // vary/sweep resonances: base and current tuning
@@ -110,12 +130,16 @@ class ShakerBank {
   class GpuStage;
   static void generate_task(void* self, int task);
   PhisemState& state_ref(int voice);
+  uint32_t take_slots(uint32_t count) noexcept;
+  void give_slots(uint32_t first, uint32_t count) noexcept;
   void retune(Voice& v, const PhisemState& st, uint32_t frames);
 
   Filterbank& fb_;
   ShakerBankOptions opt_;
   SlotLease lease_;
   uint32_t slot_end_ = 0;
+  // Runs of slots freed by removed voices (first, count), sorted and merged.
+  std::vector<std::pair<uint32_t, uint32_t>> free_runs_;
   std::vector<Voice> voices_;
   std::vector<PhisemParams> params_;
   std::vector<PhisemState> states_;  // CPU backend
@@ -127,6 +151,11 @@ class ShakerBank {
   int tasks_ = 1;
   std::unique_ptr<GpuStage> gpu_;
   std::string backend_name_;
+};
+
+struct ShakerBank::PreparedVoice {
+  Voice voice;
+  PhisemParams params;
 };
 
 /// A shake at a time (s) for offline rendering.

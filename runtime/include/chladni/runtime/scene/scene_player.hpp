@@ -81,12 +81,29 @@ class ScenePlayer {
   /// Objects removed whose fade has ended since clear_retired(): their places may be installed
   /// again. Recorded up to max_objects.
   std::span<const uint32_t> retired() const { return retired_; }
-  void clear_retired() { retired_.clear(); }
+  void clear_retired() {
+    retired_.clear();
+    retired_shakers_.clear();
+  }
 
   /// Adds a shaker at `object`: a voice whose resonances are the object's modes (`resonate`:
   /// they take the object's listener gains) or an instrument's own (they take the object's
   /// distance spreading); both take its pan. Silent until shaken. Control thread.
   int add_shaker(std::size_t object, const ShakerVoice& voice, bool resonate);
+  /// A shaker made ready off the audio thread; install_shaker() takes it.
+  struct PreparedShaker;
+  /// Validates and builds a shaker's voice (allocates). Throws InputError on bad values or when
+  /// the player has no room for shakers.
+  std::unique_ptr<PreparedShaker> prepare_shaker(const ShakerVoice& voice, bool resonate) const;
+  /// Places `prepared` at index `shaker` (shaker_count(), or one retired_shakers() reported) on
+  /// `object`, without allocating; `prepared` then holds what the index held before. False
+  /// when the index is taken, the object is not live, a resonating voice's resonances are not
+  /// the object's modes, or the bank has no room.
+  bool install_shaker(int shaker, std::size_t object, PreparedShaker& prepared);
+  /// Fades a shaker out over the gain ramp; its voice is then removed and its index reported by
+  /// retired_shakers(). An object's removal removes its shakers so.
+  void remove_shaker(int shaker);
+  std::span<const uint32_t> retired_shakers() const { return retired_shakers_; }
   /// Adds `energy` (0-1) to a shaker at fractional sample `offset` of the next render; false
   /// when it cannot be taken this render (the shake list is full) or the shaker's object was
   /// removed.
@@ -149,14 +166,18 @@ class ScenePlayer {
     double spread = 1;
   };
   struct Shaker {
-    std::size_t object;
-    bool resonate;
-    std::size_t resonances;
-    bool dead = false;  // its object was removed (whatever takes the place later is another)
+    std::size_t object = 0;
+    bool resonate = false;
+    std::vector<float> flat;  // an instrument's gains, one per resonance (zeros silence it)
+    bool dead = true;         // removed, or its object was (whatever takes the place later is
+                              // another)
+    bool fading = false;      // its voice is removed at fade_end
+    uint64_t fade_end = 0;
   };
   void apply_gains(Object& object);
   void own_transfer_gains(Object& object);
   void retire(std::size_t object);
+  void end_shaker_fades();
   void apply_shaker_gains(int shaker);
 
   Filterbank& fb_;
@@ -164,10 +185,10 @@ class ScenePlayer {
   std::unique_ptr<ShakerBank> bank_;  // leases its slots before the synth
   Synth synth_;
   std::vector<Shaker> shakers_;
-  std::size_t fading_ = 0;   // removed objects still fading out
-  std::vector<float> flat_;  // an instrument shaker's gains, one per resonance
+  std::size_t fading_ = 0;  // removed objects still fading out
+  std::size_t shakers_fading_ = 0;
   std::vector<Object> objects_;
-  std::vector<uint32_t> retired_;
+  std::vector<uint32_t> retired_, retired_shakers_;
   Listener listener_;
   bool dirty_ = true;
   // Listener gains from transfer.
@@ -180,6 +201,11 @@ class ScenePlayer {
   bool tables_ready_ = false;
   uint64_t gain_updates_ = 0;
   double gain_seconds_ = 0;
+};
+
+struct ScenePlayer::PreparedShaker {
+  std::unique_ptr<ShakerBank::PreparedVoice> voice;
+  Shaker shaker;
 };
 
 struct ScenePlayer::PreparedObject {
