@@ -50,5 +50,5 @@ UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
 echo "== ThreadSanitizer: the multi-threaded tests (scripts/tsan.sh)"
 bash scripts/tsan.sh build/tsan
 
-echo "== fuzzing every reader for ${CHLADNI_FUZZ_SECONDS:-15} s each (scripts/fuzz.sh)"
-bash scripts/fuzz.sh "${CHLADNI_FUZZ_SECONDS:-15}"
+echo "== fuzzing every reader for ${CHLADNI_FUZZ_SECONDS:-10} s each (scripts/fuzz.sh)"
+bash scripts/fuzz.sh "${CHLADNI_FUZZ_SECONDS:-10}"
