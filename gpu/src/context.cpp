@@ -266,25 +266,8 @@ Context::Context(const ContextOptions& options) {
     const Candidate* chosen = choose_device(cands, options.device);
     physical_ = chosen->pd;
     info_ = chosen->info;
-    vkGetPhysicalDeviceProperties(physical_, &properties_);
-    vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
-
-    VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
-    VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
-    p2.pNext = &sub;
-    vkGetPhysicalDeviceProperties2(physical_, &p2);
-    subgroup_size_ = std::max(1u, sub.subgroupSize);
-    subgroup_arithmetic_ = (sub.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
-                           (sub.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT);
-
     queue_family_ = static_cast<uint32_t>(compute_family(physical_));
-    uint32_t nf = 0;
-    vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nf, nullptr);
-    std::vector<VkQueueFamilyProperties> fams(nf);
-    vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nf, fams.data());
-    const uint32_t bits = fams[queue_family_].timestampValidBits;
-    timestamps_ = bits > 0 && properties_.limits.timestampPeriod > 0;
-    timestamp_mask_ = bits >= 64 ? ~uint64_t{0} : ((uint64_t{1} << bits) - 1);
+    inspect_device();
 
     const float priority = 1.0f;
     VkDeviceQueueCreateInfo qi{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
@@ -296,15 +279,87 @@ Context::Context(const ContextOptions& options) {
     di.pQueueCreateInfos = &qi;
     check(vkCreateDevice(physical_, &di, nullptr, &device_), "vkCreateDevice");
     vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
-
-    VkCommandPoolCreateInfo pi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
-    pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
-    pi.queueFamilyIndex = queue_family_;
-    check(vkCreateCommandPool(device_, &pi, nullptr, &pool_), "vkCreateCommandPool");
+    create_pool();
   } catch (...) {
     release();
     throw;
   }
+}
+
+Context::Context(const ExternalDevice& d) : owned_(false) {
+  if (!d.instance || !d.physical || !d.device)
+    throw Error("a shared Vulkan device needs its instance, physical device and device");
+  if (bool(d.lock_queue) != bool(d.unlock_queue))
+    throw Error("a shared Vulkan queue needs both lock_queue and unlock_queue, or neither");
+  if (d.get_instance_proc_addr && !d.get_instance_proc_addr(d.instance, "vkGetDeviceProcAddr"))
+    throw Error("the shared device's vkGetInstanceProcAddr does not resolve its functions");
+  physical_ = d.physical;
+  device_ = d.device;
+  queue_family_ = d.queue_family;
+  uint32_t nf = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nf, nullptr);
+  std::vector<VkQueueFamilyProperties> fams(nf);
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nf, fams.data());
+  if (queue_family_ >= nf || !(fams[queue_family_].queueFlags & VK_QUEUE_COMPUTE_BIT))
+    throw Error("queue family " + std::to_string(queue_family_) + " has no compute queue");
+  if (d.queue_index >= fams[queue_family_].queueCount)
+    throw Error("queue family " + std::to_string(queue_family_) + " has " +
+                std::to_string(fams[queue_family_].queueCount) + " queues, not index " +
+                std::to_string(d.queue_index));
+  vkGetPhysicalDeviceProperties(physical_, &properties_);
+  if (properties_.apiVersion < VK_API_VERSION_1_1)
+    throw Error("the shared device is not Vulkan 1.1");
+  info_.name = properties_.deviceName;
+  info_.type = properties_.deviceType;
+  info_.api_version = properties_.apiVersion;
+  inspect_device();
+  vkGetDeviceQueue(device_, queue_family_, d.queue_index, &queue_);
+  lock_queue_ = d.lock_queue;
+  unlock_queue_ = d.unlock_queue;
+  try {
+    create_pool();
+  } catch (...) {
+    release();
+    throw;
+  }
+}
+
+// Limits, memory types, subgroups and timestamps of physical_ and queue_family_.
+void Context::inspect_device() {
+  vkGetPhysicalDeviceProperties(physical_, &properties_);
+  vkGetPhysicalDeviceMemoryProperties(physical_, &memory_);
+  VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+  VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+  p2.pNext = &sub;
+  vkGetPhysicalDeviceProperties2(physical_, &p2);
+  subgroup_size_ = std::max(1u, sub.subgroupSize);
+  subgroup_arithmetic_ = (sub.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) &&
+                         (sub.supportedOperations & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT);
+  uint32_t nf = 0;
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nf, nullptr);
+  std::vector<VkQueueFamilyProperties> fams(nf);
+  vkGetPhysicalDeviceQueueFamilyProperties(physical_, &nf, fams.data());
+  const uint32_t bits = fams[queue_family_].timestampValidBits;
+  timestamps_ = bits > 0 && properties_.limits.timestampPeriod > 0;
+  timestamp_mask_ = bits >= 64 ? ~uint64_t{0} : ((uint64_t{1} << bits) - 1);
+}
+
+void Context::create_pool() {
+  VkCommandPoolCreateInfo pi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+  pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+  pi.queueFamilyIndex = queue_family_;
+  check(vkCreateCommandPool(device_, &pi, nullptr, &pool_), "vkCreateCommandPool");
+}
+
+void Context::submit(const VkSubmitInfo& info, VkFence fence) {
+  if (!lock_queue_) {
+    check(vkQueueSubmit(queue_, 1, &info, fence), "vkQueueSubmit");
+    return;
+  }
+  lock_queue_();
+  const VkResult r = vkQueueSubmit(queue_, 1, &info, fence);
+  unlock_queue_();
+  check(r, "vkQueueSubmit");
 }
 
 Context::~Context() {
@@ -312,6 +367,12 @@ Context::~Context() {
 }
 
 void Context::release() {
+  if (device_ && !owned_) {  // the application's: only what was made here goes
+    if (pool_) vkDestroyCommandPool(device_, pool_, nullptr);
+    device_ = VK_NULL_HANDLE;
+    pool_ = VK_NULL_HANDLE;
+    return;
+  }
   if (device_) {
     vkDeviceWaitIdle(device_);
     if (pool_) vkDestroyCommandPool(device_, pool_, nullptr);

@@ -85,7 +85,7 @@ void Sequence::submit() {
   VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
   si.commandBufferCount = 1;
   si.pCommandBuffers = &cmd_;
-  check(vkQueueSubmit(ctx_->queue(), 1, &si, fence_), "vkQueueSubmit");
+  ctx_->submit(si, fence_);
   pending_ = true;
 }
 

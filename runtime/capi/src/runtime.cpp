@@ -15,7 +15,30 @@ namespace {
 
 thread_local std::string g_error;
 
-// GPU asked for explicitly fails without a device; AUTO takes a hardware GPU, else the CPU.
+// The application's device, its queue under its lock when it gives one.
+std::shared_ptr<gpu::Context> shared_device(const chladni_vulkan_device& v) {
+  gpu::ExternalDevice d;
+  d.instance = static_cast<VkInstance>(v.instance);
+  d.physical = static_cast<VkPhysicalDevice>(v.physical_device);
+  d.device = static_cast<VkDevice>(v.device);
+  d.queue_family = v.queue_family;
+  d.queue_index = v.queue_index;
+  d.get_instance_proc_addr = reinterpret_cast<PFN_vkGetInstanceProcAddr>(v.get_instance_proc_addr);
+  if (v.lock_queue || v.unlock_queue) {
+    if (!v.lock_queue || !v.unlock_queue)
+      throw InputError("vulkan: lock_queue and unlock_queue go together");
+    d.lock_queue = [f = v.lock_queue, u = v.user] { f(u); };
+    d.unlock_queue = [f = v.unlock_queue, u = v.user] { f(u); };
+  }
+  try {
+    return std::make_shared<gpu::Context>(d);
+  } catch (const gpu::Error& e) {
+    throw InputError(std::string("vulkan: ") + e.what());
+  }
+}
+
+// GPU asked for explicitly fails without a device; AUTO takes a hardware GPU, else the CPU; a
+// shared device is taken by both.
 std::unique_ptr<Filterbank> make_filterbank(const chladni_config& c) {
   FilterbankRequest r;
   r.backend = c.backend == CHLADNI_BACKEND_CPU   ? gpu::DeviceChoice::Cpu
@@ -29,6 +52,7 @@ std::unique_ptr<Filterbank> make_filterbank(const chladni_config& c) {
   r.max_streams = c.shaker_slots ? c.max_shakers : 0;
   r.gain_ramp = c.gain_ramp;
   r.pipelined = c.gpu_pipeline != 0;
+  if (c.vulkan && c.backend != CHLADNI_BACKEND_CPU) r.device = shared_device(*c.vulkan);
   return runtime::make_filterbank(r);
 }
 

@@ -41,6 +41,7 @@ std::unique_ptr<Filterbank> cpu_filterbank(const FilterbankRequest& r) {
 
 std::unique_ptr<Filterbank> make_filterbank(const FilterbankRequest& r) {
   using gpu::DeviceChoice;
+  if (r.device && r.backend != DeviceChoice::Cpu) return gpu_filterbank(r.device, r);
   if (r.backend == DeviceChoice::Gpu && !r.gpu_falls_back)
     return gpu_filterbank(std::make_shared<gpu::Context>(), r);  // NoDeviceError passes on
   const auto warn = [&](const std::string& why) {

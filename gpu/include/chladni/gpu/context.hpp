@@ -45,9 +45,29 @@ struct ContextOptions {
   static bool default_validation();
 };
 
+/// A device the application made (a renderer's), for the runtime to share: it then creates no
+/// instance or device, records on the given queue, and leaves the handles' ownership to the
+/// application, which keeps them alive while the Context lives. The runtime calls Vulkan through
+/// the system loader (libvulkan.so.1), so the handles must come from it.
+struct ExternalDevice {
+  VkInstance instance = VK_NULL_HANDLE;
+  VkPhysicalDevice physical = VK_NULL_HANDLE;
+  VkDevice device = VK_NULL_HANDLE;
+  uint32_t queue_family = 0;  ///< must support compute
+  uint32_t queue_index = 0;
+  /// The loader's vkGetInstanceProcAddr the handles were made with (optional): the device's
+  /// functions must resolve through it.
+  PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
+  /// Called around each submit when the queue is shared with the application's threads (a
+  /// queue must not be submitted to from two threads at once); both or neither.
+  std::function<void()> lock_queue, unlock_queue;
+};
+
 class Context {
  public:
   explicit Context(const ContextOptions& options = {});
+  /// Shares an application's device; throws Error naming what does not fit.
+  explicit Context(const ExternalDevice& device);
   ~Context();
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -73,6 +93,11 @@ class Context {
   uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
                        VkMemoryPropertyFlags preferred, VkMemoryPropertyFlags* got = nullptr) const;
 
+  /// Submits to the queue, under the application's lock when it shares the queue.
+  void submit(const VkSubmitInfo& info, VkFence fence);
+  /// False for an application's device (ExternalDevice).
+  bool owns_device() const { return owned_; }
+
   bool validation_enabled() const { return messenger_ != VK_NULL_HANDLE; }
   /// Validation-layer errors reported so far (tests require zero).
   std::size_t validation_errors() const { return validation_errors_.load(); }
@@ -80,6 +105,8 @@ class Context {
 
  private:
   void release();
+  void inspect_device();
+  void create_pool();
   static VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT,
                                                    VkDebugUtilsMessageTypeFlagsEXT,
                                                    const VkDebugUtilsMessengerCallbackDataEXT*,
@@ -99,6 +126,8 @@ class Context {
   bool timestamps_ = false;
   uint64_t timestamp_mask_ = 0;
   std::atomic<std::size_t> validation_errors_{0};
+  bool owned_ = true;
+  std::function<void()> lock_queue_, unlock_queue_;
 };
 
 /// Where work that can run on either side should go.

@@ -52,6 +52,28 @@ typedef enum chladni_backend {
   CHLADNI_BACKEND_AUTO = 2 /* the GPU when a Vulkan device is usable, else the CPU */
 } chladni_backend;
 
+/* A Vulkan device the application made (its renderer's), for the GPU backend to share: the
+ * runtime then creates no instance or device of its own and records on the queue it is given.
+ * The handles are the application's VkInstance, VkPhysicalDevice and VkDevice (dispatchable
+ * handles, passed as pointers), made through the system Vulkan loader, which the runtime calls;
+ * they must outlive the runtime, which destroys only what it made on them. The queue's family
+ * must support compute. Give the runtime a queue of its own where the device has one: then the
+ * two sides need no synchronisation beyond what each does with its own work. Where the queue
+ * is shared with the application's threads (a device with one queue), lock_queue and
+ * unlock_queue are called around each of the runtime's submits: from chladni_runtime_render,
+ * once per block, so the application should hold that lock only briefly. */
+typedef struct chladni_vulkan_device {
+  void* instance;
+  void* physical_device;
+  void* device;
+  uint32_t queue_family;
+  uint32_t queue_index;
+  void* get_instance_proc_addr;   /* optional: the loader's PFN_vkGetInstanceProcAddr, checked */
+  void (*lock_queue)(void* user); /* both or neither */
+  void (*unlock_queue)(void* user);
+  void* user;
+} chladni_vulkan_device;
+
 typedef struct chladni_config {
   chladni_backend backend; /* CPU */
   double sample_rate;      /* 48000 */
@@ -68,6 +90,8 @@ typedef struct chladni_config {
                               device, its output block_size frames late
                               (chladni_runtime_latency); 0: each render waits for its own block */
   double horizon;          /* 60: seconds ahead of the clock a command may be timed */
+  const chladni_vulkan_device* vulkan; /* NULL: the GPU backend opens a device of its own; else
+                                          GPU and AUTO run on this one (copied at creation) */
 } chladni_config;
 
 typedef struct chladni_runtime chladni_runtime;

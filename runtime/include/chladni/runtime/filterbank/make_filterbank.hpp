@@ -26,6 +26,8 @@ struct FilterbankRequest {
   uint32_t max_streams = 0;    ///< gpu: input streams of driven slots (PhISEM voices)
   uint32_t gain_ramp = 256;    ///< samples over which gain changes ramp (0: at once)
   bool pipelined = false;      ///< gpu: process() returns before the device is done
+  /// Gpu or Auto: this device (an application's, shared) rather than one opened here.
+  std::shared_ptr<gpu::Context> device;
 };
 
 std::unique_ptr<Filterbank> make_filterbank(const FilterbankRequest& request);
