@@ -356,7 +356,9 @@ TEST(SharedDevice, RendersAudioBesideTheApplicationsDrawingOnItsOwnDevice) {
   EXPECT_GE(frames.load(), 3);
   // On one queue, every block went through the application's lock: the runtime submitted on the
   // application's device and queue, not on a device of its own.
-  if (app.queues == 1) EXPECT_GE(app.runtime_submits.load(), 120);
+  if (app.queues == 1) {
+    EXPECT_GE(app.runtime_submits.load(), 120);
+  }
   ASSERT_EQ(gpu.size(), cpu.size());
   const double peak = chladni::test::max_abs(cpu);
   ASSERT_GT(peak, 1e-4);

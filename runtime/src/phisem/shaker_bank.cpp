@@ -18,10 +18,6 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
 
-bool finite(std::complex<float> c) {
-  return std::isfinite(c.real()) && std::isfinite(c.imag());
-}
-
 // Random in [-1, 1) for retuning resonance j after the block that started at `counter`.
 double retune_noise(uint32_t key, uint32_t counter, uint32_t j) {
   const uint32_t h = pcg_hash(pcg_hash(counter ^ 0xa511e9b3u) ^ key ^ pcg_hash(j + 0x68e31da4u));

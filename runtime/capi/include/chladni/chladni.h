@@ -13,7 +13,7 @@
  *    chladni_shaker_shake. Lock-free and allocation-free; they reach the audio thread through a
  *    single-producer single-consumer queue.
  *  - audio: chladni_runtime_render. It never allocates, locks or waits (beyond the filterbank's
- *    own work).
+ *    own work, and, on a Vulkan queue shared with the application, its lock_queue once a block).
  *  chladni_runtime_time, chladni_runtime_latency and chladni_last_error may be called anywhere.
  *
  * Lifetimes. The runtime owns every bank and object. chladni_bank_release gives up the caller's
