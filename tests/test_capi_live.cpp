@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iterator>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -123,8 +125,12 @@ TEST(CApiLive, ValuesThatCannotPlayAreRefusedNamingTheArgument) {
   const chladni_bank bank = tone(r.rt, 500);
   chladni_object o{0};
   EXPECT_EQ(chladni_object_spawn(r.rt, bank, kAt, kIdentity, -1.0, &o), CHLADNI_INPUT_ERROR);
-  EXPECT_TRUE(said("gain must be finite and >= 0")) << chladni_last_error();
+  EXPECT_TRUE(said("gain must be in [0, 1e6]")) << chladni_last_error();
   EXPECT_EQ(chladni_object_spawn(r.rt, bank, kAt, kIdentity, NAN, &o), CHLADNI_INPUT_ERROR);
+  EXPECT_EQ(chladni_object_spawn(r.rt, bank, kAt, kIdentity, 1e300, &o), CHLADNI_INPUT_ERROR);
+  const double far[3] = {0, 1e300, 0};  // finite, but its squared distance is not
+  EXPECT_EQ(chladni_object_spawn(r.rt, bank, far, kIdentity, 1.0, &o), CHLADNI_INPUT_ERROR);
+  EXPECT_TRUE(said("within 1e9 m")) << chladni_last_error();
   const double nan_at[3] = {0, NAN, 0};
   EXPECT_EQ(chladni_object_spawn(r.rt, bank, nan_at, kIdentity, 1.0, &o), CHLADNI_INPUT_ERROR);
   EXPECT_TRUE(said("position must be finite")) << chladni_last_error();
@@ -132,6 +138,14 @@ TEST(CApiLive, ValuesThatCannotPlayAreRefusedNamingTheArgument) {
             CHLADNI_INPUT_ERROR);
   EXPECT_TRUE(said("no bank 77")) << chladni_last_error();
   ASSERT_EQ(chladni_object_spawn(r.rt, bank, kAt, kIdentity, 1.0, &o), CHLADNI_OK);
+  // An impulse whose kick no float holds.
+  chladni_impact huge{};
+  huge.object = o;
+  huge.impulse = 1e300;
+  huge.direction[2] = -1;
+  huge.vertex = -1;
+  EXPECT_EQ(chladni_impact_post(r.rt, &huge), CHLADNI_INPUT_ERROR);
+  EXPECT_TRUE(said("impulse must be in (0, 1e6] N s")) << chladni_last_error();
   // Times: forever ahead, infinite, NaN.
   EXPECT_EQ(strike(r.rt, o, 1e300), CHLADNI_INPUT_ERROR);
   EXPECT_TRUE(said("horizon")) << chladni_last_error();
@@ -280,4 +294,83 @@ TEST(CApiLive, ShakersComeAndGoWhileTheirObjectPlays) {
   ASSERT_EQ(chladni_shaker_shake(rt, c2, chladni_runtime_time(rt), 1.0), CHLADNI_OK);
   EXPECT_GT(chladni::test::max_abs(render(2400)), 0.0);
   chladni_runtime_destroy(rt);
+}
+
+TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
+  // Hostile use: valid, stale and made-up handles, NaN and huge values, renders of any size,
+  // banks released under live objects, all interleaved at random.
+  LiveRuntime r(8);
+  std::mt19937 rng(2026);
+  std::vector<chladni_bank> banks;
+  std::vector<chladni_object> objects;
+  std::vector<chladni_shaker> shakers;
+  const double weird[] = {0.0, -1.0, 1e300, NAN, INFINITY, 0.01, 2.0};
+  auto pick = [&](auto& v, auto junk) {
+    return v.empty() || rng() % 5 == 0 ? junk : v[rng() % v.size()];
+  };
+  auto any = [&] { return weird[rng() % std::size(weird)]; };
+  for (int step = 0; step < 4000; ++step) {
+    chladni_status s = CHLADNI_OK;
+    const double t = chladni_runtime_time(r.rt) + (rng() % 3 ? 0.001 : any());
+    switch (rng() % 9) {
+      case 0:
+        banks.push_back(tone(r.rt, 200 + rng() % 4000));
+        break;
+      case 1:
+        s = chladni_bank_release(r.rt, pick(banks, chladni_bank{rng()}));
+        break;
+      case 2: {
+        chladni_object o{0};
+        const double at[3] = {any(), 1, 0};
+        s = chladni_object_spawn(r.rt, pick(banks, chladni_bank{rng()}), rng() % 4 ? kAt : at,
+                                 kIdentity, rng() % 4 ? 1.0 : any(), &o);
+        if (s == CHLADNI_OK) objects.push_back(o);
+        break;
+      }
+      case 3:
+        s = chladni_object_remove(r.rt, pick(objects, chladni_object{rng()}));
+        break;
+      case 4: {
+        chladni_impact im{};
+        im.object = pick(objects, chladni_object{rng()});
+        im.time = t;
+        im.impulse = rng() % 3 ? 0.01 : any();
+        im.direction[2] = rng() % 4 ? -1 : 0;
+        im.vertex = rng() % 5 ? -1 : int64_t(rng() % 10);
+        s = chladni_impact_post(r.rt, &im);
+        break;
+      }
+      case 5: {
+        const chladni_shaker_desc d{pick(objects, chladni_object{rng()}),
+                                    rng() % 2 ? "maraca" : "gravel", 0, int(rng() % 2), 0};
+        chladni_shaker k{0};
+        s = chladni_shaker_add(r.rt, &d, &k);
+        if (s == CHLADNI_OK) shakers.push_back(k);
+        break;
+      }
+      case 6:
+        s = rng() % 2 ? chladni_shaker_remove(r.rt, pick(shakers, chladni_shaker{rng()}))
+                      : chladni_shaker_shake(r.rt, pick(shakers, chladni_shaker{rng()}), t,
+                                             rng() % 3 ? 0.5 : any());
+        break;
+      case 7:
+        s = chladni_object_move(r.rt, pick(objects, chladni_object{rng()}), t, kAt, kIdentity);
+        break;
+      default: {
+        std::vector<float> out = r.render(uint32_t(rng() % 700));
+        for (float x : out) ASSERT_TRUE(std::isfinite(x));
+      }
+    }
+    ASSERT_TRUE(s == CHLADNI_OK || s == CHLADNI_INPUT_ERROR || s == CHLADNI_QUEUE_FULL)
+        << "step " << step << ": " << chladni_last_error();
+  }
+  for (chladni_shaker k : shakers) chladni_shaker_remove(r.rt, k);
+  for (chladni_object o : objects) chladni_object_remove(r.rt, o);
+  for (chladni_bank b : banks) chladni_bank_release(r.rt, b);
+  r.render(512);
+  EXPECT_EQ(chladni::test::max_abs(r.render(256)), 0.0);
+  r.rt->reclaim();
+  EXPECT_TRUE(r.rt->banks.empty());
+  EXPECT_EQ(r.rt->free_places.size(), 8u);
+  EXPECT_EQ(r.rt->free_shaker_places.size(), r.rt->max_shakers());
 }

@@ -114,7 +114,8 @@ chladni_status chladni_bank_from_modes(chladni_runtime* rt, const double* freque
         throw InputError(at + ": frequency must be in (0, Nyquist)");
       if (!(decay[i] >= 0 && std::isfinite(decay[i])))
         throw InputError(at + ": decay must be finite and >= 0");
-      if (!std::isfinite(amplitude[i])) throw InputError(at + ": amplitude must be finite");
+      if (!(std::abs(amplitude[i]) <= capi::kMaxGain))
+        throw InputError(at + ": amplitude must be finite and within 1e6 Pa");
       b->inline_modes.push_back({frequency_hz[i], decay[i], amplitude[i]});
     }
     b->modes = object_modes(b->inline_modes);

@@ -100,7 +100,11 @@ chladni_status guarded(const char* call, F&& f) {
   }
 }
 
-/// InputError unless `v` holds 3 finite numbers (and, with `nonzero`, is not zero).
+// The largest values that still play: a coordinate (m), an object's gain, an impulse (N s).
+// Past them a mode's gain or kick overflows a float, and the audio thread would have to drop it.
+constexpr double kMaxCoordinate = 1e9, kMaxGain = 1e6, kMaxImpulse = 1e6;
+
+/// InputError unless `v` holds 3 numbers within kMaxCoordinate (and, with `nonzero`, not zero).
 void need_vector(const double* v, const char* what, bool nonzero = true);
 /// The unit quaternion of `q` (w, x, y, z); InputError when not finite or zero.
 Quat unit_quaternion(const double* q);
@@ -156,6 +160,7 @@ struct chladni_runtime {
   std::vector<uint64_t> installed_shaker_ids;   // per shaker place: the shaker installed there
   std::vector<chladni::capi::Command> pending;  // drained commands, by time; capacity fixed
   uint64_t lost_returns = 0;                    // returns dropped on a full queue (a bug)
-  uint64_t now = 0;                             // samples rendered (audio thread)
+  uint64_t dropped_commands = 0;   // commands the player refused (values past what plays)
+  uint64_t now = 0;                // samples rendered (audio thread)
   std::atomic<uint64_t> clock{0};  // `now`, published for chladni_runtime_time on other threads
 };

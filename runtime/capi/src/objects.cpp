@@ -16,8 +16,10 @@ namespace chladni::capi {
 
 void need_vector(const double* v, const char* what, bool nonzero) {
   if (!v) throw InputError(std::string(what) + " must not be null");
+  // Beyond a billion metres, squared distances and pans stop being finite floats.
   for (int i = 0; i < 3; ++i)
-    if (!std::isfinite(v[i])) throw InputError(std::string(what) + " must be finite");
+    if (!(std::abs(v[i]) <= kMaxCoordinate))
+      throw InputError(std::string(what) + " must be finite and within 1e9 m");
   if (nonzero && v[0] * v[0] + v[1] * v[1] + v[2] * v[2] == 0)
     throw InputError(std::string(what) + " must not be zero");
 }
@@ -116,7 +118,7 @@ chladni_status chladni_object_spawn(chladni_runtime* rt, chladni_bank bank,
     capi::Bank& b = rt->bank(bank);
     capi::need_vector(position, "position", false);
     const Quat q = capi::unit_quaternion(orientation);
-    if (!(gain >= 0 && std::isfinite(gain))) throw InputError("gain must be finite and >= 0");
+    if (!(gain >= 0 && gain <= capi::kMaxGain)) throw InputError("gain must be in [0, 1e6]");
     if (rt->free_places.empty()) {
       capi::fail(CHLADNI_QUEUE_FULL, "chladni_object_spawn: max_objects (" +
                                          std::to_string(rt->config.max_objects) +
@@ -244,8 +246,8 @@ chladni_status chladni_impact_post(chladni_runtime* rt, const chladni_impact* im
     if (!rt || !im) throw InputError("runtime and impact must not be null");
     const uint32_t k = live(rt, im->object);
     rt->check_time(im->time);
-    if (!(im->impulse > 0 && std::isfinite(im->impulse)))
-      throw InputError("impulse must be finite and > 0");
+    if (!(im->impulse > 0 && im->impulse <= capi::kMaxImpulse))
+      throw InputError("impulse must be in (0, 1e6] N s");
     if (!(im->contact_time >= 0 && im->contact_time <= 0.1))
       throw InputError("contact_time must be in [0, 0.1] s");
     capi::need_vector(im->direction, "direction");

@@ -248,8 +248,14 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
     else
       ev.point = Vec3{c.b[0], c.b[1], c.b[2]};
     ev.contact_time = c.contact;
-    // A late impact (its first sample has passed) is struck at once.
-    player->impact(k, ev, at <= t ? 0.0 : c.time * config.sample_rate - static_cast<double>(t));
+    // A late impact (its first sample has passed) is struck at once. One the player cannot
+    // take (a kick past what a float holds, which the calls' bounds should prevent) is dropped,
+    // so that it cannot fail every render after it.
+    try {
+      player->impact(k, ev, at <= t ? 0.0 : c.time * config.sample_rate - static_cast<double>(t));
+    } catch (const InputError&) {
+      ++dropped_commands;
+    }
     return true;
   });
 }

@@ -116,8 +116,9 @@ void chladni_runtime_destroy(chladni_runtime* runtime);
 const char* chladni_runtime_backend(const chladni_runtime* runtime);
 
 /* Banks (control calls): a soundbank (chladni precompute) from a file or from its bytes, or
- * inline modes (frequency Hz, decay 1/s, pressure at 1 m per N s). Modes above the runtime's
- * Nyquist frequency are dropped; a bank with none left is refused. */
+ * inline modes (frequency Hz below Nyquist, decay 1/s, pressure at 1 m per N s within 1e6 Pa).
+ * A soundbank's modes above the runtime's Nyquist frequency are dropped; a bank with none left
+ * is refused. */
 chladni_status chladni_bank_load_file(chladni_runtime* runtime, const char* path,
                                       chladni_bank* out);
 chladni_status chladni_bank_load_memory(chladni_runtime* runtime, const void* bytes, size_t size,
@@ -153,10 +154,10 @@ chladni_status chladni_bank_bounds(const chladni_runtime* runtime, chladni_bank 
  * rigid body. 0 for inline modes or an unknown handle. Control call. */
 double chladni_bank_mass(const chladni_runtime* runtime, chladni_bank bank);
 
-/* An instance of a bank at a pose (position in m; orientation a unit quaternion w, x, y, z,
- * object frame to world) with a gain (finite, >= 0). It sounds from the next block the audio
- * thread starts; commands may be posted for it at once. CHLADNI_QUEUE_FULL when max_objects
- * objects are alive or still fading out. Control call. */
+/* An instance of a bank at a pose (position in m, each coordinate within 1e9; orientation a
+ * unit quaternion w, x, y, z, object frame to world) with a gain in [0, 1e6]. It sounds from the
+ * next block the audio thread starts; commands may be posted for it at once. CHLADNI_QUEUE_FULL
+ * when max_objects objects are alive or still fading out. Control call. */
 chladni_status chladni_object_spawn(chladni_runtime* runtime, chladni_bank bank,
                                     const double position[3], const double orientation[4],
                                     double gain, chladni_object* object);
@@ -167,7 +168,7 @@ chladni_status chladni_object_remove(chladni_runtime* runtime, chladni_object ob
 typedef struct chladni_impact {
   chladni_object object;
   double time;         /* s on the runtime's clock */
-  double impulse;      /* N s, > 0 */
+  double impulse;      /* N s, in (0, 1e6] */
   double direction[3]; /* object frame; normalized here */
   double point[3];     /* object frame: the nearest surface point is struck ... */
   int64_t vertex;      /* ... unless this is >= 0: that surface point */
