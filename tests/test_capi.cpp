@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "capi_fixtures.hpp"
 #include "chladni/chladni.h"
 #include "chladni/core/material.hpp"
 #include "chladni/core/scene.hpp"
@@ -18,17 +19,7 @@ using namespace chladni;
 
 namespace {
 
-struct Runtime {
-  explicit Runtime(uint32_t queue = 4096) {
-    chladni_config c;
-    chladni_config_default(&c);
-    c.threads = 1;
-    c.queue_capacity = queue;
-    EXPECT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();
-  }
-  ~Runtime() { chladni_runtime_destroy(rt); }
-  chladni_runtime* rt = nullptr;
-};
+using Runtime = test::CApiRuntime;
 
 const std::vector<InlineMode> kBowl = {{441, 2.0, 0.02}, {1142, 3.0, 0.01}, {2650, 5.0, 0.004}};
 const std::vector<InlineMode> kBar = {{576.5, 4.0, 0.01}, {1589, 7.0, 0.006}};
@@ -272,7 +263,7 @@ TEST(CApi, PlaysAnAnalyticBarAsTheSceneFormatDoes) {
 }
 
 TEST(CApi, RefusesBadInputAndAFullQueue) {
-  Runtime r(4);
+  Runtime r([](chladni_config& c) { c.queue_capacity = 4; });
   chladni_bank b = bank(r.rt, kBowl);
   const double origin[3] = {0, 1, 0}, identity[4] = {1, 0, 0, 0}, zero[4] = {0, 0, 0, 0};
   chladni_object id{0};

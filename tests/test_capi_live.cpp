@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "../runtime/capi/src/handles.hpp"
+#include "capi_fixtures.hpp"
 #include "chladni/chladni.h"
 #include "chladni/core/modal_model.hpp"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
@@ -17,21 +18,10 @@
 
 namespace {
 
-struct LiveRuntime {
-  explicit LiveRuntime(uint32_t max_objects) {
-    chladni_config c;
-    chladni_config_default(&c);
-    c.threads = 1;
-    c.max_objects = max_objects;
-    EXPECT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();
-  }
-  ~LiveRuntime() { chladni_runtime_destroy(rt); }
-  std::vector<float> render(uint32_t frames) {
-    std::vector<float> out(2 * frames);
-    EXPECT_EQ(chladni_runtime_render(rt, out.data(), frames), CHLADNI_OK) << chladni_last_error();
-    return out;
-  }
-  chladni_runtime* rt = nullptr;
+// A runtime with room for `max_objects` objects.
+struct LiveRuntime : chladni::test::CApiRuntime {
+  explicit LiveRuntime(uint32_t max_objects)
+      : CApiRuntime([&](chladni_config& c) { c.max_objects = max_objects; }) {}
 };
 
 chladni_bank tone(chladni_runtime* rt, double hz) {
@@ -243,17 +233,9 @@ TEST(CApiLive, AnInstalledObjectWithTransferSoundsAsAnAddedOne) {
 }
 
 TEST(CApiLive, ShakersComeAndGoWhileTheirObjectPlays) {
-  chladni_config c;
-  chladni_config_default(&c);
-  c.threads = 1;
-  c.max_shakers = 2;
-  chladni_runtime* rt = nullptr;
-  ASSERT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();
-  auto render = [&](uint32_t frames) {
-    std::vector<float> out(2 * frames);
-    EXPECT_EQ(chladni_runtime_render(rt, out.data(), frames), CHLADNI_OK) << chladni_last_error();
-    return out;
-  };
+  chladni::test::CApiRuntime r([](chladni_config& c) { c.max_shakers = 2; });
+  chladni_runtime* rt = r.rt;
+  auto render = [&](uint32_t frames) { return r.render(frames); };
   const chladni_bank bank = tone(rt, 700);
   chladni_object bowl{0}, bar{0};
   ASSERT_EQ(chladni_object_spawn(rt, bank, kAt, kIdentity, 1.0, &bowl), CHLADNI_OK);
@@ -293,7 +275,6 @@ TEST(CApiLive, ShakersComeAndGoWhileTheirObjectPlays) {
   EXPECT_EQ(chladni_shaker_remove(rt, b), CHLADNI_INPUT_ERROR);
   ASSERT_EQ(chladni_shaker_shake(rt, c2, chladni_runtime_time(rt), 1.0), CHLADNI_OK);
   EXPECT_GT(chladni::test::max_abs(render(2400)), 0.0);
-  chladni_runtime_destroy(rt);
 }
 
 TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {

@@ -290,7 +290,7 @@ Context::Context(const ExternalDevice& d) : owned_(false) {
   if (!d.instance || !d.physical || !d.device)
     throw Error("a shared Vulkan device needs its instance, physical device and device");
   if (bool(d.lock_queue) != bool(d.unlock_queue))
-    throw Error("a shared Vulkan queue needs both lock_queue and unlock_queue, or neither");
+    throw Error("lock_queue and unlock_queue go together: give both or neither");
   if (d.get_instance_proc_addr && !d.get_instance_proc_addr(d.instance, "vkGetDeviceProcAddr"))
     throw Error("the shared device's vkGetInstanceProcAddr does not resolve its functions");
   physical_ = d.physical;

@@ -22,6 +22,7 @@ chladni_bank keep(chladni_runtime* rt, std::unique_ptr<Bank> bank) {
     bank->table =
         object_transfer_table(*bank->modes.transfer, bank->modes.modes.size() >= kMapModes);
   const uint64_t id = rt->next_bank++;
+  bank->id = id;
   rt->banks.emplace(id, std::move(bank));
   return chladni_bank{id};
 }

@@ -59,6 +59,7 @@ struct Bank {
   std::vector<InlineMode> inline_modes;
   runtime::ObjectModes modes;
   std::unique_ptr<runtime::TransferTable> table;  // the model's transfer, for its objects
+  uint64_t id = 0;                                // its handle's, the key in chladni_runtime::banks
   double mass = 0;       // kg: the surface's volume times the density (0 for inline modes)
   uint32_t objects = 0;  // objects placed and not yet retired
   bool released = false;
@@ -115,6 +116,10 @@ inline uint64_t handle_id(uint32_t place, uint32_t generation) {
 }
 inline uint32_t place_of(uint64_t id) {
   return static_cast<uint32_t>(id & 0xffffffffu);
+}
+/// The generation after `g`, skipping 0 (an id of 0 is none).
+inline uint32_t next_generation(uint32_t g) {
+  return g + 1 == 0 ? 1 : g + 1;
 }
 
 }  // namespace chladni::capi

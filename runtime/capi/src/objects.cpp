@@ -37,22 +37,25 @@ Quat unit_quaternion(const double* q) {
 
 namespace {
 
-// The place of a live object handle, for the game thread.
-uint32_t live(const chladni_runtime* rt, chladni_object object) {
-  const uint32_t k = capi::place_of(object.id);
-  if (object.id == 0 || k >= rt->config.max_objects ||
-      rt->places[k].id.load(std::memory_order_acquire) != object.id)
-    throw InputError("no object " + std::to_string(object.id) + " (never spawned, or removed)");
+// The place of the live handle `id` among `count` places (objects' or shakers'), for the game
+// thread; InputError naming the `noun` and how a handle stops being live otherwise.
+template <class Place>
+uint32_t live_place(uint64_t id, const Place* places, uint32_t count, const char* noun,
+                    const char* why) {
+  const uint32_t k = capi::place_of(id);
+  if (id == 0 || k >= count || places[k].id.load(std::memory_order_acquire) != id)
+    throw InputError(std::string("no ") + noun + " " + std::to_string(id) + " (" + why + ")");
   return k;
 }
 
-// The place of a live shaker handle, for the game thread.
+uint32_t live(const chladni_runtime* rt, chladni_object object) {
+  return live_place(object.id, rt->places.get(), rt->config.max_objects, "object",
+                    "never spawned, or removed");
+}
+
 uint32_t live_shaker(const chladni_runtime* rt, chladni_shaker shaker) {
-  const uint32_t s = capi::place_of(shaker.id);
-  if (shaker.id == 0 || s >= rt->max_shakers() ||
-      rt->shakers[s].id.load(std::memory_order_acquire) != shaker.id)
-    throw InputError("no shaker " + std::to_string(shaker.id) + " (never added, or removed)");
-  return s;
+  return live_place(shaker.id, rt->shakers.get(), rt->max_shakers(), "shaker",
+                    "never added, or removed");
 }
 
 chladni_status post(chladni_runtime* rt, const Command& c) {
@@ -70,13 +73,7 @@ void chladni_runtime::reclaim() {
     capi::Place& p = places[k];
     uint64_t expected = capi::handle_id(k, p.generation);
     p.id.compare_exchange_strong(expected, 0);  // a refused spawn was never removed
-    if (p.bank && --p.bank->objects == 0 && p.bank->released) {
-      for (auto it = banks.begin(); it != banks.end(); ++it)
-        if (it->second.get() == p.bank) {
-          banks.erase(it);
-          break;
-        }
-    }
+    if (p.bank && --p.bank->objects == 0 && p.bank->released) banks.erase(p.bank->id);
     p.bank = nullptr;
     free_places.push_back(k);
   };
@@ -129,7 +126,7 @@ chladni_status chladni_object_spawn(chladni_runtime* rt, chladni_bank bank,
         b.modes, b.table.get(), {position[0], position[1], position[2]}, q, gain);
     const uint32_t k = rt->free_places.back();
     capi::Place& p = rt->places[k];
-    const uint32_t generation = p.generation + 1 == 0 ? 1 : p.generation + 1;  // id 0 is none
+    const uint32_t generation = capi::next_generation(p.generation);
     const uint64_t id = capi::handle_id(k, generation);
     capi::Change ch{capi::Change::Kind::Spawn, k, id};
     ch.prepared = prepared.get();
@@ -194,7 +191,7 @@ chladni_status chladni_shaker_add(chladni_runtime* rt, const chladni_shaker_desc
     std::unique_ptr<ScenePlayer::PreparedShaker> prepared =
         rt->player->prepare_shaker(voice, ev.resonate_object);
     capi::ShakerPlace& p = rt->shakers[s];
-    const uint32_t generation = p.generation + 1 == 0 ? 1 : p.generation + 1;
+    const uint32_t generation = capi::next_generation(p.generation);
     const uint64_t id = capi::handle_id(s, generation);
     capi::Change ch{capi::Change::Kind::AddShaker, s, id};
     ch.object = desc->object.id;

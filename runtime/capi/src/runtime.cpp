@@ -24,12 +24,9 @@ std::shared_ptr<gpu::Context> shared_device(const chladni_vulkan_device& v) {
   d.queue_family = v.queue_family;
   d.queue_index = v.queue_index;
   d.get_instance_proc_addr = reinterpret_cast<PFN_vkGetInstanceProcAddr>(v.get_instance_proc_addr);
-  if (v.lock_queue || v.unlock_queue) {
-    if (!v.lock_queue || !v.unlock_queue)
-      throw InputError("vulkan: lock_queue and unlock_queue go together");
-    d.lock_queue = [f = v.lock_queue, u = v.user] { f(u); };
-    d.unlock_queue = [f = v.unlock_queue, u = v.user] { f(u); };
-  }
+  // Context refuses one without the other.
+  if (v.lock_queue) d.lock_queue = [f = v.lock_queue, u = v.user] { f(u); };
+  if (v.unlock_queue) d.unlock_queue = [f = v.unlock_queue, u = v.user] { f(u); };
   try {
     return std::make_shared<gpu::Context>(d);
   } catch (const gpu::Error& e) {

@@ -110,7 +110,6 @@ Synth::VoiceId Synth::start_voice(VoiceData& data) noexcept {
       std::swap(static_cast<VoiceData&>(voice), data);
       voice.alive = true;
       voice.pan[0] = voice.pan[1] = 1.0f;
-      ++alive_;
       return static_cast<VoiceId>(v);
     }
   }
@@ -332,7 +331,6 @@ void Synth::stop_voice(VoiceId id) {
   }
   forces_.drop_voice(id);
   v.alive = false;
-  --alive_;
 }
 
 void Synth::render(uint32_t frames, float* out, const DriveInput& drive) {

@@ -100,10 +100,6 @@ bool ShakerBank::add_voice(PreparedVoice& p, uint32_t index) {
       (index < voices_.size() && voices_[index].live) || n == 0)
     return false;
   const bool fresh = index == voices_.size();
-  // Growing past the reserved storage would allocate on the audio thread.
-  if (fresh && !gpu_ && input_.capacity() < std::size_t(index + 1) * fb_.max_frames() &&
-      opt_.reserve_all)
-    return false;
   const uint32_t first = take_slots(n);
   if (first == ~0u) return false;
   if (fresh)

@@ -66,8 +66,6 @@ class Synth {
   VoiceId start_voice(VoiceData& data) noexcept;
   /// prepare_voice() and start_voice(data) in one (control thread). Throws when no voice is free.
   VoiceId start_voice(std::span<const ModeSpec> modes);
-  /// Voices alive.
-  uint32_t voice_count() const { return alive_; }
   /// Per-channel gains of the whole voice (right ignored in mono). Default 1, 1.
   void set_pan(VoiceId voice, float left, float right);
   /// New per-mode gains; resident modes change at the next render().
@@ -135,7 +133,7 @@ class Synth {
   std::vector<float> force_block_, force_delay_;
   std::size_t delay_head_ = 0;
   std::size_t pending_count_ = 0;
-  uint32_t used_ = 0, high_water_ = 0, scan_cursor_ = 0, alive_ = 0;
+  uint32_t used_ = 0, high_water_ = 0, scan_cursor_ = 0;
   uint64_t now_ = 0;
   SynthStats stats_;
 };
