@@ -141,18 +141,12 @@ bool PaperAnimation::anchored(std::uint32_t v, std::uint32_t f) const {
   return false;
 }
 
-void validate(const PaperAnimation& anim, const std::string& where) {
-  // Each frame becomes fs / frame_rate samples, and the sound is held in memory.
+void validate_sheet(const PaperAnimation& anim, const std::string& where) {
+  // Each frame becomes fs / frame_rate samples.
   if (!(anim.frame_rate >= 1 && anim.frame_rate <= 10000))
     throw InputError(where + ": frame_rate must lie in [1, 10000] frames/s");
   if (anim.vertex_count < 3 || anim.triangles.empty())
     throw InputError(where + ": the sheet needs at least one triangle");
-  if (anim.positions.size() % (3 * std::size_t(anim.vertex_count)) != 0)
-    throw InputError(where + ": position count is not a whole number of frames");
-  if (anim.frame_count() < 2) throw InputError(where + ": an animation needs at least 2 frames");
-  if (anim.duration() > 3600)
-    throw InputError(where + ": " + std::to_string(anim.frame_count()) + " frames at " +
-                     std::to_string(anim.frame_rate) + " frames/s last more than an hour");
   for (std::size_t t = 0; t < anim.triangles.size(); ++t) {
     const auto& tri = anim.triangles[t];
     for (uint32_t v : tri) {
@@ -163,6 +157,28 @@ void validate(const PaperAnimation& anim, const std::string& where) {
     if (tri[0] == tri[1] || tri[1] == tri[2] || tri[0] == tri[2])
       throw InputError(where + ": triangle " + std::to_string(t) + " repeats a vertex");
   }
+  for (std::size_t o = 0; o < anim.obstacles.size(); ++o) {
+    const Vec3& n = anim.obstacles[o].normal;
+    if (!is_finite(anim.obstacles[o].point) || !is_finite(n) ||
+        std::abs(std::sqrt(dot(n, n)) - 1.0) > 1e-6)
+      throw InputError(where + ": obstacles[" + std::to_string(o) +
+                       "]: point must be finite and normal a unit vector");
+  }
+  if (!(anim.contact_distance > 0) || !std::isfinite(anim.contact_distance))
+    throw InputError(where + ": contact_distance must be finite and > 0");
+  if (!(anim.listener.ear_distance >= 0) || !std::isfinite(anim.listener.ear_distance))
+    throw InputError(where + ": listener.ear_distance must be finite and >= 0");
+}
+
+void validate(const PaperAnimation& anim, const std::string& where) {
+  validate_sheet(anim, where);
+  // The sound is held in memory.
+  if (anim.positions.size() % (3 * std::size_t(anim.vertex_count)) != 0)
+    throw InputError(where + ": position count is not a whole number of frames");
+  if (anim.frame_count() < 2) throw InputError(where + ": an animation needs at least 2 frames");
+  if (anim.duration() > 3600)
+    throw InputError(where + ": " + std::to_string(anim.frame_count()) + " frames at " +
+                     std::to_string(anim.frame_rate) + " frames/s last more than an hour");
   for (uint32_t f = 0; f < anim.frame_count(); ++f) {
     const auto x = anim.frame(f);
     for (std::size_t i = 0; i < x.size(); ++i) {
@@ -184,17 +200,6 @@ void validate(const PaperAnimation& anim, const std::string& where) {
                        std::to_string(an.last_frame) + "] outside 0.." +
                        std::to_string(anim.frame_count() - 1));
   }
-  for (std::size_t o = 0; o < anim.obstacles.size(); ++o) {
-    const Vec3& n = anim.obstacles[o].normal;
-    if (!is_finite(anim.obstacles[o].point) || !is_finite(n) ||
-        std::abs(std::sqrt(dot(n, n)) - 1.0) > 1e-6)
-      throw InputError(where + ": obstacles[" + std::to_string(o) +
-                       "]: point must be finite and normal a unit vector");
-  }
-  if (!(anim.contact_distance > 0) || !std::isfinite(anim.contact_distance))
-    throw InputError(where + ": contact_distance must be finite and > 0");
-  if (!(anim.listener.ear_distance >= 0) || !std::isfinite(anim.listener.ear_distance))
-    throw InputError(where + ": listener.ear_distance must be finite and >= 0");
 }
 
 void write_paper_frames_binary(const std::string& path, const PaperAnimation& anim) {

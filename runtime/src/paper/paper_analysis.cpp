@@ -39,6 +39,20 @@ PaperFrameAnalysis PaperAnalyzer::analyze(std::uint32_t frame) {
   if (frame >= anim_.frame_count())
     throw InputError("paper analysis: frame " + std::to_string(frame) + " of " +
                      std::to_string(anim_.frame_count()));
+  return analyze(frame, anim_.frame(frame), nullptr);
+}
+
+PaperFrameAnalysis PaperAnalyzer::analyze(std::uint32_t frame, std::span<const float> xyz,
+                                          const std::vector<std::uint32_t>* held) {
+  if (xyz.size() != std::size_t(topo_.vertex_count) * 3)
+    throw InputError("paper analysis: frame " + std::to_string(frame) + " has " +
+                     std::to_string(xyz.size() / 3) + " vertices, the sheet " +
+                     std::to_string(topo_.vertex_count));
+  if (held)
+    for (std::uint32_t v : *held)
+      if (v >= topo_.vertex_count)
+        throw InputError("paper analysis: frame " + std::to_string(frame) + " holds vertex " +
+                         std::to_string(v) + " of " + std::to_string(topo_.vertex_count));
   const bool continuing = frame != 0 && std::int64_t(frame) == last_frame_ + 1;
   if (frame != 0 && !continuing)
     throw InputError("paper analysis: frames must be analysed in order (got " +
@@ -46,14 +60,18 @@ PaperFrameAnalysis PaperAnalyzer::analyze(std::uint32_t frame) {
   PaperFrameAnalysis out;
   out.frame = frame;
   out.time = frame / anim_.frame_rate;
-  geo_.update(topo_, anim_.frame(frame));
+  geo_.update(topo_, xyz);
   partitioned_ = false;
 
   // Vertices held by fingers or lying on an obstacle: vibrations stop there.
   std::fill(constrained_.begin(), constrained_.end(), 0);
-  for (const PaperAnchor& a : anim_.anchors)
-    if (frame >= a.first_frame && frame <= a.last_frame)
-      for (std::uint32_t v : a.vertices) constrained_[v] = 1;
+  if (held) {
+    for (std::uint32_t v : *held) constrained_[v] = 1;
+  } else {
+    for (const PaperAnchor& a : anim_.anchors)
+      if (frame >= a.first_frame && frame <= a.last_frame)
+        for (std::uint32_t v : a.vertices) constrained_[v] = 1;
+  }
   for (const PaperObstacle& o : anim_.obstacles)
     for (std::size_t v = 0; v < geo_.position.size(); ++v)
       if (dot(sub(geo_.position[v], o.point), o.normal) < anim_.contact_distance)

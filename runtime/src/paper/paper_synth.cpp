@@ -89,24 +89,35 @@ PaperRenderer::PaperRenderer(const PaperAnimation& anim, const PaperSoundDb* db,
   }
   ears_ = ear_positions(anim_.listener);
   head_ = anim_.listener.position;
+  if (opt_.live) {
+    limit_ = std::numeric_limits<std::int64_t>::max();
+    return;
+  }
   const std::size_t frames = static_cast<std::size_t>(
       std::ceil((anim_.duration() + opt_.tail_seconds) * opt_.sample_rate));
   for (auto& ch : out_) ch.assign(frames, 0.0f);
+  limit_ = static_cast<std::int64_t>(frames);
   report_.audio_seconds = double(frames) / opt_.sample_rate;
 }
 
 PaperRenderer::~PaperRenderer() = default;
 
+std::int64_t PaperRenderer::sample_of(std::uint32_t frame) const {
+  return static_cast<std::int64_t>(std::llround(frame / anim_.frame_rate * opt_.sample_rate));
+}
+
 const PaperFrameAnalysis& PaperRenderer::step() {
-  if (done()) throw InternalError("PaperRenderer::step past the last frame");
+  if (done() || opt_.live) throw InternalError("PaperRenderer::step past the last frame");
+  return step_at(anim_.frame(next_frame_), nullptr);
+}
+
+const PaperFrameAnalysis& PaperRenderer::step_at(std::span<const float> xyz,
+                                                 const std::vector<std::uint32_t>* held) {
   const auto t0 = Clock::now();
+  last_ = analyzer_.analyze(next_frame_, xyz, held);  // may throw: nothing changed yet
   const std::uint32_t f = next_frame_++;
-  last_ = analyzer_.analyze(f);
   const double analysis_ms = ms_since(t0);
   const auto t1 = Clock::now();
-  const auto sample_of = [&](std::uint32_t frame) {
-    return static_cast<std::int64_t>(std::llround(frame / anim_.frame_rate * opt_.sample_rate));
-  };
   const std::int64_t at = sample_of(f), next = sample_of(f + 1);
   const bool use_db = opt_.mode != PaperSynthMode::Modal;
   const bool use_modal = opt_.mode != PaperSynthMode::Database;
@@ -161,14 +172,18 @@ const PaperFrameAnalysis& PaperRenderer::step() {
   return last_;
 }
 
-AudioBuffer PaperRenderer::finish() {
+void PaperRenderer::render_tail(std::int64_t end) {
   const auto t = Clock::now();
-  const std::int64_t end = static_cast<std::int64_t>(out_[0].size());
   friction_.clear();
   for (auto& [key, v] : friction_voices_) v.speed = 0;
   if (synth_) render_modal_until(end);
   if (noise_) render_friction_until(end);
   report_.synthesis_ms += ms_since(t);
+}
+
+AudioBuffer PaperRenderer::finish() {
+  if (opt_.live) throw InternalError("PaperRenderer::finish on a live renderer: end() and read()");
+  render_tail(limit_);
   AudioBuffer a;
   a.sample_rate = static_cast<int>(opt_.sample_rate);
   a.channels = 2;
@@ -192,7 +207,6 @@ void PaperRenderer::play_crumple_clip(const PaperResonator& r, double scale, std
       e.crumple[rng_.index(static_cast<std::uint32_t>(e.crumple.size()))];
   const double a = disk_radius(r);
   const double a_ref = recorded_radius(e, a);
-  const std::int64_t frames = static_cast<std::int64_t>(out_[0].size());
   for (int ear = 0; ear < 2; ++ear) {
     paths_scratch_.clear();
     dipole_paths(r.centroid, r.normal, a, a_ref, ears_[ear], anim_.obstacles, opt_.spatial,
@@ -201,8 +215,9 @@ void PaperRenderer::play_crumple_clip(const PaperResonator& r, double scale, std
       const std::int64_t start = at + std::llround(p.delay * opt_.sample_rate);
       const float g = static_cast<float>(scale * p.gain);
       const std::int64_t n =
-          std::min<std::int64_t>(static_cast<std::int64_t>(clip.size()), frames - start);
-      float* dst = out_[ear].data() + start;  // planar: the loop vectorizes
+          std::min<std::int64_t>(static_cast<std::int64_t>(clip.size()), limit_ - start);
+      if (n <= 0) continue;
+      float* dst = window(ear, start, start + n);  // planar: the loop vectorizes
       for (std::int64_t i = 0; i < n; ++i) dst[i] += g * clip[i];
     }
   }
@@ -233,7 +248,7 @@ void PaperRenderer::add_friction_source(const PaperEvent& ev, const PaperResonat
 }
 
 void PaperRenderer::render_friction_until(std::int64_t end) {
-  const std::int64_t frames = static_cast<std::int64_t>(out_[0].size());
+  const std::int64_t frames = limit_;
   constexpr std::size_t K = SpectralNoise::kBins;
   const double dw = 2 * kPi * opt_.sample_rate / double(SpectralNoise::kSize);
   while (friction_pos_ < end && friction_pos_ < frames) {
@@ -263,9 +278,11 @@ void PaperRenderer::render_friction_until(std::int64_t end) {
     }
     noise_->hop(mags_, hop_out_.data());
     const std::int64_t n = std::min<std::int64_t>(SpectralNoise::kHop, frames - friction_pos_);
+    float* left = window(0, friction_pos_, friction_pos_ + n);
+    float* right = window(1, friction_pos_, friction_pos_ + n);
     for (std::int64_t i = 0; i < n; ++i) {
-      out_[0][friction_pos_ + i] += hop_out_[2 * i];
-      out_[1][friction_pos_ + i] += hop_out_[2 * i + 1];
+      left[i] += hop_out_[2 * i];
+      right[i] += hop_out_[2 * i + 1];
     }
     friction_pos_ += SpectralNoise::kHop;
   }
@@ -367,7 +384,7 @@ void PaperRenderer::touch_friction_voice(const PaperEvent& ev, const PaperResona
 }
 
 void PaperRenderer::render_modal_until(std::int64_t end) {
-  const std::int64_t frames = static_cast<std::int64_t>(out_[0].size());
+  const std::int64_t frames = limit_;
   const double click_gap = opt_.sample_rate / opt_.friction_click_rate;
   const double click_gain = opt_.modal_friction_gain;
   while (modal_pos_ < end && modal_pos_ < frames) {
@@ -397,9 +414,11 @@ void PaperRenderer::render_modal_until(std::int64_t end) {
     }
     synth_->render(n, block_.data());
     const std::int64_t keep = std::min<std::int64_t>(n, frames - modal_pos_);
+    float* left = window(0, modal_pos_, modal_pos_ + keep);
+    float* right = window(1, modal_pos_, modal_pos_ + keep);
     for (std::int64_t i = 0; i < keep; ++i) {
-      out_[0][modal_pos_ + i] += block_[2 * i];
-      out_[1][modal_pos_ + i] += block_[2 * i + 1];
+      left[i] += block_[2 * i];
+      right[i] += block_[2 * i + 1];
     }
     modal_pos_ = block_end;
     // Crumple voices whose burst has rung out give their slots back.

@@ -79,5 +79,8 @@ void read_paper_frames_binary(const std::string& path, PaperAnimation& anim);
 
 /// Checks counts, indices, finiteness and topology; throws InputError naming the problem.
 void validate(const PaperAnimation& anim, const std::string& where);
+/// The same for what does not depend on frames: the frame rate, triangles, obstacles, contact
+/// distance and listener (a live sheet, whose frames come from a simulation).
+void validate_sheet(const PaperAnimation& anim, const std::string& where);
 
 }  // namespace chladni

@@ -3,6 +3,7 @@
 // crumpling events, the partition into flat and curved regions, and for each event the
 // resonators it sets vibrating with their (l_r, l_c) parameters (§5).
 #include <cstdint>
+#include <span>
 #include <utility>
 #include <vector>
 
@@ -66,6 +67,12 @@ class PaperAnalyzer {
   PaperAnalyzer(const PaperAnimation& anim, PaperAnalysisOptions options = {});
   /// Frame f must follow the previous call's frame by one (or be 0 to restart).
   PaperFrameAnalysis analyze(std::uint32_t frame);
+  /// The same for positions given by the caller (3 floats per vertex), frames arriving one at a
+  /// time from a live simulation: the animation supplies the sheet, obstacles and frame rate.
+  /// `held`, when given, replaces the animation's anchors for this frame (InputError on an index
+  /// past the sheet's vertices, or a position count that is not the sheet's).
+  PaperFrameAnalysis analyze(std::uint32_t frame, std::span<const float> xyz,
+                             const std::vector<std::uint32_t>* held = nullptr);
   const PaperTopology& topology() const { return topo_; }
   const PaperGeometry& geometry() const { return geo_; }
   /// Region id per face from the last analysed frame with events.

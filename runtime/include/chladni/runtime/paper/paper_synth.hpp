@@ -3,12 +3,15 @@
 // resonators become sound. Database mode plays crumpling clips (Eq. 5: direct plus image copy
 // per ear) and sums friction spectra weighted by Eq. 6 into inverse-FFT noise; modal mode runs
 // each resonator as a modal voice on a filterbank (CPU or GPU), its modes from the sheet model
-// at the resonator's (l_r, l_c), excited by crumple bursts or friction clicks. Offline: the
-// whole animation renders into one stereo buffer; frame() costs are what a game would pay.
+// at the resonator's (l_r, l_c), excited by crumple bursts or friction clicks. Offline, the
+// whole animation renders into one stereo buffer; live (PaperSynthOptions::live), frames come
+// from a simulation one at a time and each frame's audio is read once final, the same samples
+// as offline. step()'s costs are what a game pays per frame.
 #include <cstdint>
 #include <map>
 #include <memory>
 #include <optional>
+#include <span>
 #include <tuple>
 #include <vector>
 
@@ -49,6 +52,10 @@ struct PaperSynthOptions {
   double modal_friction_gain = 5.6;
   double modal_reference_radius = 0.05;  ///< m: the dipole size normalization (a / this)^3
   std::uint32_t max_voices = 16384;
+  /// Frames come one at a time from a live simulation (PaperRenderer::step(xyz)) with no end
+  /// known, and the audio is taken as it becomes final (read()); the animation's own frames are
+  /// not read.
+  bool live = false;
 };
 
 struct PaperRenderReport {
@@ -73,10 +80,24 @@ class PaperRenderer {
 
   /// Analyses the next frame and synthesizes audio up to the following frame's start.
   const PaperFrameAnalysis& step();
-  bool done() const { return next_frame_ >= anim_.frame_count(); }
+  bool done() const { return !opt_.live && next_frame_ >= anim_.frame_count(); }
   /// Renders the tail and returns the stereo buffer (call once, after the last step()).
   AudioBuffer finish();
   const PaperRenderReport& report() const { return report_; }
+
+  /// Live: the next frame from the caller's positions (3 floats per vertex), with `held`
+  /// replacing the animation's anchors when given (PaperAnalyzer::analyze). The samples up to
+  /// the following frame's start become final; sounds it starts may run on past them.
+  const PaperFrameAnalysis& step(std::span<const float> xyz,
+                                 const std::vector<std::uint32_t>* held = nullptr);
+  /// Live: stops taking frames and renders tail_seconds after the last one.
+  void end();
+  /// Live: stereo frames final and not yet read.
+  std::size_t ready() const;
+  /// Live: moves the oldest `frames` (<= ready()) final stereo frames, interleaved, to `out`.
+  void read(float* out, std::size_t frames);
+  /// The frame the next step analyses.
+  std::uint32_t next_frame() const { return next_frame_; }
 
  private:
   struct FrictionSource {
@@ -110,6 +131,12 @@ class PaperRenderer {
   const std::vector<SheetMode>& resonator_modes(const PaperResonator& r);
   void set_voice_spatial(const ModalVoice& v, const PaperResonator& r);
   const std::vector<float>& hop_bins(const std::vector<float>& spectrum);
+  const PaperFrameAnalysis& step_at(std::span<const float> xyz,
+                                    const std::vector<std::uint32_t>* held);
+  std::int64_t sample_of(std::uint32_t frame) const;
+  void render_tail(std::int64_t end);
+  // Channel `ch` of the output from absolute sample `from` to `to`, grown to hold it.
+  float* window(int ch, std::int64_t from, std::int64_t to);
 
   const PaperAnimation& anim_;
   const PaperSoundDb* db_;
@@ -121,7 +148,12 @@ class PaperRenderer {
   Vec3 head_;
   Rng rng_;
   std::uint32_t next_frame_ = 0;
-  std::array<std::vector<float>, 2> out_;  // left, right (planar until finish())
+  // Left and right (planar until finish()) from absolute sample out_base_: the whole sound
+  // offline; live, what is not yet read, up to where sounds already started reach.
+  std::array<std::vector<float>, 2> out_;
+  std::int64_t out_base_ = 0;
+  std::int64_t limit_ = 0;   // samples rendered in all: offline the animation's, live unbounded
+  std::int64_t ended_ = -1;  // live, after end(): the last sample's end
   PaperRenderReport report_;
   // Database friction.
   std::unique_ptr<SpectralNoise> noise_;
