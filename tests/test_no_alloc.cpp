@@ -10,6 +10,7 @@
 #include <new>
 #include <numbers>
 
+#include "capi_paper_sheet.hpp"
 #include "capi_storm.hpp"
 #include "chladni/chladni.h"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
@@ -198,4 +199,32 @@ TEST(CApi, RenderingDoesNotAllocateWhileObjectsSpawnAndGo) {
   EXPECT_GT(peak, 0.0f);
   storm.clear();
   chladni_runtime_destroy(rt);
+}
+
+TEST(CApi, RenderingDoesNotAllocateWhilePaperSheetsPlay) {
+  // A crumpled sheet posted frame by frame in modal mode, then removed: the control thread
+  // analyses and synthesizes, the audio thread only mixes what it is handed and retires the sheet.
+  chladni::test::CApiPaperSheet p;
+  ASSERT_NE(p.sheet.id, 0u);
+  std::vector<float> out(2 * 735);
+  float peak = 0;
+  long allocs = 0;
+  for (std::uint32_t f = 0; f < p.anim.frame_count() + 60; ++f) {
+    if (f < p.anim.frame_count()) {
+      ASSERT_EQ(p.post(f), CHLADNI_OK) << chladni_last_error();
+    }
+    if (f == p.anim.frame_count()) {
+      ASSERT_EQ(chladni_paper_remove(p.rt, p.sheet), CHLADNI_OK);
+    }
+    g_allocs = 0;
+    t_count = true;
+    const chladni_status s = chladni_runtime_render(p.rt, out.data(), 735);
+    t_count = false;
+    allocs += g_allocs.load();
+    ASSERT_EQ(s, CHLADNI_OK);
+    for (float x : out) peak = std::max(peak, std::abs(x));
+  }
+  EXPECT_EQ(allocs, 0);
+  EXPECT_GT(peak, 0.0f);
+  EXPECT_TRUE(p.place_given_back());
 }

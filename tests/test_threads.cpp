@@ -1,5 +1,6 @@
 // The runtime's multi-threaded paths: a game thread posting through the C API's queue while the
-// audio thread renders, the CPU filterbank's worker threads and the shakers' excitation threads.
+// audio thread renders, a control thread posting paper frames, the CPU filterbank's worker
+// threads and the shakers' excitation threads.
 // Each gives the samples of its single-threaded run. CI also runs these under ThreadSanitizer
 // (scripts/tsan.sh), which fails them on any data race.
 #include <gtest/gtest.h>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "../runtime/capi/src/handles.hpp"
+#include "capi_paper_sheet.hpp"
 #include "capi_storm.hpp"
 #include "chladni/chladni.h"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
@@ -252,4 +254,49 @@ TEST(Threads, ObjectsSpawnAndGoWhileTheAudioThreadRenders) {
   EXPECT_EQ(rt->free_shaker_places.size(), 64u);
   EXPECT_EQ(rt->lost_returns, 0u);
   chladni_runtime_destroy(rt);
+}
+
+TEST(Threads, PaperFramesPostedWhileTheAudioThreadRenders) {
+  // The control thread analyses and renders a crumpling sheet's frames, waiting for room when it
+  // is half a second ahead, and removes it; the audio thread, paced at a few times real time,
+  // mixes what it is handed and retires the sheet.
+  test::CApiPaperSheet p;
+  ASSERT_NE(p.sheet.id, 0u);
+  std::atomic<bool> done{false}, gave_up{false};
+  std::string unexpected;
+  std::thread control([&] {
+    for (std::uint32_t f = 0; f < p.anim.frame_count() && !gave_up.load();) {
+      const chladni_status s = p.post(f);
+      if (s == CHLADNI_OK) {
+        ++f;
+      } else if (s == CHLADNI_QUEUE_FULL) {
+        std::this_thread::sleep_for(std::chrono::microseconds(200));
+      } else {
+        unexpected = chladni_last_error();
+        break;
+      }
+    }
+    if (chladni_paper_remove(p.rt, p.sheet) != CHLADNI_OK) unexpected = chladni_last_error();
+    done.store(true, std::memory_order_release);
+  });
+  std::vector<float> out(2 * 256);
+  float peak = 0;
+  const auto t0 = std::chrono::steady_clock::now();
+  // Past the end, 2.3 s for what is buffered and the tail to play out.
+  for (int after = 0; after < 400;) {
+    if (std::chrono::steady_clock::now() - t0 > std::chrono::seconds(60)) break;
+    ASSERT_EQ(chladni_runtime_render(p.rt, out.data(), 256), CHLADNI_OK) << chladni_last_error();
+    for (float x : out) {
+      ASSERT_TRUE(std::isfinite(x));
+      peak = std::max(peak, std::abs(x));
+    }
+    if (done.load(std::memory_order_acquire)) ++after;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  gave_up.store(true);
+  control.join();
+  EXPECT_TRUE(done.load());
+  EXPECT_EQ(unexpected, "");
+  EXPECT_GT(peak, 0.0f);
+  EXPECT_TRUE(p.place_given_back());
 }

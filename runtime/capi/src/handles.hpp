@@ -36,19 +36,42 @@ struct Command {
   double a[3], b[3], c[3], q[4];  // direction/point/-, position/forward/up, orientation
 };
 
-// Control -> audio: an object or a shaker to place, or one to remove.
+// A paper sheet's audio on its way from the control thread, which renders each posted frame, to
+// the audio thread, which mixes it in at its time.
+struct PaperStream {
+  static constexpr uint64_t kNotStarted = ~uint64_t{0};
+  explicit PaperStream(std::size_t floats) : ring(floats) {}
+  runtime::SpscRing ring;  // stereo, interleaved
+  // The output sample of the sheet's first sample: set once, before its first samples are
+  // written (the ring's release publishes it).
+  std::atomic<uint64_t> start{kNotStarted};
+  std::atomic<bool> ended{false};  // nothing more will be written
+  float gain = 1;
+  // Audio thread: stereo frames consumed, and those dropped for arriving after their time.
+  uint64_t consumed = 0, late = 0;
+};
+
+// Control -> audio: an object or a shaker to place, or one to remove; a paper stream to mix.
 struct Change {
-  enum class Kind : uint8_t { Spawn, Remove, AddShaker, RemoveShaker } kind;
+  enum class Kind : uint8_t { Spawn, Remove, AddShaker, RemoveShaker, AddPaper } kind;
   uint32_t place;
   uint64_t id;
   uint64_t object = 0;                                       // AddShaker: its object's handle id
   runtime::ScenePlayer::PreparedObject* prepared = nullptr;  // Spawn
   runtime::ScenePlayer::PreparedShaker* shaker = nullptr;    // AddShaker
+  PaperStream* paper = nullptr;                              // AddPaper
 };
 
 // Audio -> control: a place whose object or shaker has faded out, or storage to free.
 struct Return {
-  enum class Kind : uint8_t { Retired, Garbage, Refused, ShakerRetired, ShakerGarbage } kind;
+  enum class Kind : uint8_t {
+    Retired,
+    Garbage,
+    Refused,
+    ShakerRetired,
+    ShakerGarbage,
+    PaperRetired
+  } kind;
   uint32_t place;
   runtime::ScenePlayer::PreparedObject* prepared = nullptr;  // Garbage, Refused
   runtime::ScenePlayer::PreparedShaker* shaker = nullptr;    // ShakerGarbage (also refused)
@@ -81,6 +104,12 @@ struct ShakerPlace {
   std::atomic<uint64_t> object{0};  // its object's handle id
   uint32_t generation = 0;
 };
+
+struct PaperSheet;  // papers.cpp: the control thread's side of a sheet
+struct PaperSheetDeleter {
+  void operator()(PaperSheet* p) const;
+};
+using PaperSheetPtr = std::unique_ptr<PaperSheet, PaperSheetDeleter>;
 
 /// Records `message` as this thread's last error; returns `status`.
 chladni_status fail(chladni_status status, std::string message);
@@ -141,6 +170,8 @@ struct chladni_runtime {
   void give_back(const chladni::capi::Return& r) {
     if (!returns.push(r)) ++lost_returns;  // sized so that it cannot fill
   }
+  void mix_papers(float* out, uint64_t start, uint32_t frames);
+  void reclaim_paper(uint32_t place);
   bool installed(uint64_t object) const {
     const uint32_t k = chladni::capi::place_of(object);
     return k < installed_ids.size() && installed_ids[k] == object;
@@ -153,7 +184,9 @@ struct chladni_runtime {
   // Control thread.
   std::unordered_map<uint64_t, std::unique_ptr<chladni::capi::Bank>> banks;
   uint64_t next_bank = 1;
-  std::vector<uint32_t> free_places, free_shaker_places;
+  std::vector<uint32_t> free_places, free_shaker_places, free_paper_places;
+  std::vector<chladni::capi::PaperSheetPtr> papers;  // per paper place
+  std::vector<uint32_t> paper_generations;
   // Shared.
   std::unique_ptr<chladni::capi::Place[]> places;
   std::unique_ptr<chladni::capi::ShakerPlace[]> shakers;
@@ -161,8 +194,9 @@ struct chladni_runtime {
   chladni::runtime::SpscQueue<chladni::capi::Change> changes;
   chladni::runtime::SpscQueue<chladni::capi::Return> returns;
   // Audio thread.
-  std::vector<uint64_t> installed_ids;          // per place: the object installed there
-  std::vector<uint64_t> installed_shaker_ids;   // per shaker place: the shaker installed there
+  std::vector<uint64_t> installed_ids;         // per place: the object installed there
+  std::vector<uint64_t> installed_shaker_ids;  // per shaker place: the shaker installed there
+  std::vector<chladni::capi::PaperStream*> installed_papers;  // per paper place
   std::vector<chladni::capi::Command> pending;  // drained commands, by time; capacity fixed
   uint64_t lost_returns = 0;                    // returns dropped on a full queue (a bug)
   uint64_t dropped_commands = 0;   // commands the player refused (values past what plays)

@@ -88,6 +88,7 @@ void chladni_runtime::reclaim() {
     returns.pop();
     if (ret.kind == Return::Kind::Retired || ret.kind == Return::Kind::Refused) vacate(ret.place);
     if (ret.kind == Return::Kind::ShakerRetired) vacate_shaker(ret.place);
+    if (ret.kind == Return::Kind::PaperRetired) reclaim_paper(ret.place);
     delete ret.prepared;
     delete ret.shaker;
   }

@@ -72,6 +72,7 @@ void check_config(const chladni_config& c) {
   if (c.shaker_slots && (c.max_shakers < 1 || c.max_shakers > 4096))
     throw InputError("max_shakers must be in [1, 4096] when shaker_slots > 0");
   if (!(c.horizon > 0 && c.horizon <= 1e6)) throw InputError("horizon must be in (0, 1e6] s");
+  if (c.max_papers > 256) throw InputError("max_papers must be at most 256");
   if (c.backend != CHLADNI_BACKEND_CPU && c.backend != CHLADNI_BACKEND_GPU &&
       c.backend != CHLADNI_BACKEND_AUTO)
     throw InputError("backend must be CPU, GPU or AUTO");
@@ -96,8 +97,11 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
       shakers(std::make_unique<capi::ShakerPlace[]>(c.shaker_slots ? c.max_shakers : 0)),
       queue(c.queue_capacity),
       // Each place has at most an addition and a removal in flight, and as many returns.
-      changes(2 * (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0))),
-      returns(2 * (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0)) + 2) {
+      changes(2 *
+              (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0) + c.max_papers)),
+      returns(
+          2 * (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0) + c.max_papers) +
+          2) {
   PlayerOptions po;
   po.sample_rate = c.sample_rate;
   po.synth.sample_rate = c.sample_rate;
@@ -115,6 +119,11 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
   for (uint32_t k = c.max_objects; k-- > 0;) free_places.push_back(k);
   free_shaker_places.reserve(max_shakers());
   for (uint32_t k = max_shakers(); k-- > 0;) free_shaker_places.push_back(k);
+  papers.resize(c.max_papers);
+  paper_generations.assign(c.max_papers, 0);
+  installed_papers.assign(c.max_papers, nullptr);
+  free_paper_places.reserve(c.max_papers);
+  for (uint32_t k = c.max_papers; k-- > 0;) free_paper_places.push_back(k);
 }
 
 chladni_runtime::~chladni_runtime() {
@@ -165,6 +174,9 @@ void chladni_runtime::take_changes() {
         break;
       case Change::Kind::RemoveShaker:
         if (installed_shaker_ids[ch.place] == ch.id) player->remove_shaker(int(ch.place));
+        break;
+      case Change::Kind::AddPaper:
+        installed_papers[ch.place] = ch.paper;
         break;
     }
   }
@@ -261,8 +273,21 @@ extern "C" {
 
 void chladni_config_default(chladni_config* c) {
   if (c)
-    *c = chladni_config{
-        CHLADNI_BACKEND_CPU, 48000, 256, 2, 65536, 256, 4096, 256, 0, 4096, 64, 1, 60.0};
+    *c = chladni_config{CHLADNI_BACKEND_CPU,
+                        48000,
+                        256,
+                        2,
+                        65536,
+                        256,
+                        4096,
+                        256,
+                        0,
+                        4096,
+                        64,
+                        1,
+                        60.0,
+                        nullptr,
+                        4};
 }
 
 const char* chladni_last_error(void) {
@@ -295,6 +320,9 @@ chladni_status chladni_runtime_render(chladni_runtime* rt, float* out, uint32_t 
     rt->drain();
     rt->take_changes();
     const int ch = rt->config.channels;
+    float* const first = out;
+    const uint64_t start = rt->now;
+    const uint32_t all = frames;
     while (frames > 0) {
       const uint32_t n = rt->until_next_pose(std::min(frames, rt->fb->max_frames()));
       rt->apply_due(rt->now, n);
@@ -309,6 +337,7 @@ chladni_status chladni_runtime_render(chladni_runtime* rt, float* out, uint32_t 
       rt->give_back({capi::Return::Kind::ShakerRetired, k});
     }
     rt->player->clear_retired();
+    rt->mix_papers(first, start, all);
     rt->clock.store(rt->now, std::memory_order_release);
     return CHLADNI_OK;
   });

@@ -55,4 +55,49 @@ class SpscQueue {
   std::size_t head_cache_ = 0;
 };
 
+/// A bounded single-producer single-consumer ring of floats, written and read in runs: one
+/// thread writes (the control thread's paper sheet), one reads (the audio thread).
+class SpscRing {
+ public:
+  explicit SpscRing(std::size_t capacity) {
+    if (capacity == 0 || capacity > (std::size_t{1} << 30))
+      throw std::invalid_argument("ring capacity must be in [1, 2^30]");
+    std::size_t n = 1;
+    while (n < capacity) n <<= 1;
+    mask_ = n - 1;
+    items_ = std::make_unique<float[]>(n);
+  }
+  /// Producer: room for this many floats.
+  std::size_t room() const {
+    return mask_ + 1 -
+           (tail_.load(std::memory_order_relaxed) - head_.load(std::memory_order_acquire));
+  }
+  /// Producer: writes all `n` floats, or nothing (false) when they do not fit.
+  bool write(const float* x, std::size_t n) {
+    if (n > room()) return false;
+    const std::size_t tail = tail_.load(std::memory_order_relaxed);
+    for (std::size_t i = 0; i < n; ++i) items_[(tail + i) & mask_] = x[i];
+    tail_.store(tail + n, std::memory_order_release);
+    return true;
+  }
+  /// Consumer: floats written and not yet consumed.
+  std::size_t size() const {
+    return tail_.load(std::memory_order_acquire) - head_.load(std::memory_order_relaxed);
+  }
+  /// Consumer: the i-th unread float (i < size()).
+  float at(std::size_t i) const {
+    return items_[(head_.load(std::memory_order_relaxed) + i) & mask_];
+  }
+  /// Consumer: drops the oldest `n` (<= size()).
+  void consume(std::size_t n) {
+    head_.store(head_.load(std::memory_order_relaxed) + n, std::memory_order_release);
+  }
+
+ private:
+  std::unique_ptr<float[]> items_;
+  std::size_t mask_ = 0;
+  alignas(64) std::atomic<std::size_t> head_{0};
+  alignas(64) std::atomic<std::size_t> tail_{0};
+};
+
 }  // namespace chladni::runtime

@@ -5,10 +5,10 @@
  *
  * Threads. Three roles, each on one thread at a time (control and game may be the same thread):
  *  - control: chladni_runtime_create/destroy, the chladni_bank_* calls, chladni_object_spawn,
- *    chladni_object_remove, chladni_shaker_add and chladni_shaker_remove. These allocate and
- *    (but create/destroy) may run while the audio thread renders: a new object or shaker is made
- *    here and handed to the audio thread through a queue, placed at the next block boundary; a
- *    removed one fades out there and is freed here afterwards.
+ *    chladni_object_remove, chladni_shaker_add, chladni_shaker_remove and the chladni_paper_*
+ *    calls. These allocate and (but create/destroy) may run while the audio thread renders: a new
+ *    object or shaker is made here and handed to the audio thread through a queue, placed at the
+ *    next block boundary; a removed one fades out there and is freed here afterwards.
  *  - game: chladni_impact_post, chladni_object_move, chladni_listener_set and
  *    chladni_shaker_shake. Lock-free and allocation-free; they reach the audio thread through a
  *    single-producer single-consumer queue.
@@ -92,6 +92,7 @@ typedef struct chladni_config {
   double horizon;          /* 60: seconds ahead of the clock a command may be timed */
   const chladni_vulkan_device* vulkan; /* NULL: the GPU backend opens a device of its own; else
                                           GPU and AUTO run on this one (copied at creation) */
+  uint32_t max_papers;                 /* 4: paper sheets alive or ringing out at once (0: none) */
 } chladni_config;
 
 typedef struct chladni_runtime chladni_runtime;
@@ -104,6 +105,9 @@ typedef struct chladni_object {
 typedef struct chladni_shaker {
   uint64_t id;
 } chladni_shaker;
+typedef struct chladni_paper {
+  uint64_t id;
+} chladni_paper;
 
 /* Fills `config` with the defaults above. */
 void chladni_config_default(chladni_config* config);
@@ -205,6 +209,54 @@ chladni_status chladni_shaker_remove(chladni_runtime* runtime, chladni_shaker sh
  * commands. */
 chladni_status chladni_shaker_shake(chladni_runtime* runtime, chladni_shaker shaker, double time,
                                     double energy);
+
+/* Paper sound (Schreck et al. 2016; docs/paper.md): a sheet whose vertex positions the game posts
+ * once per animation frame. Each frame is analysed for friction and crumpling as `chladni paper`
+ * does, on the calling (control) thread, and its audio is handed to the audio thread, which mixes
+ * it in one frame period after the sheet's first frame was posted (plus chladni_runtime_latency):
+ * the same samples `chladni paper` renders from an animation of the same frames. */
+typedef struct chladni_paper_plane {
+  double point[3];     /* m */
+  double normal[3];    /* unit, towards the paper's side */
+  const char* surface; /* the friction recordings it rubs with; NULL: "wood" */
+} chladni_paper_plane;
+
+typedef struct chladni_paper_desc {
+  /* The sheet: a paper animation's JSON (docs/paper-format.md), whose mesh, anchors, planes,
+   * listener, frame rate and contact distance are taken (its frames are not played); or, when
+   * NULL, the fields below. */
+  const char* animation;
+  uint32_t vertex_count;
+  const uint32_t* triangles; /* 3 per triangle, vertex indices */
+  uint32_t triangle_count;
+  const chladni_paper_plane* planes; /* rigid planes it may touch (a table, a wall) */
+  uint32_t plane_count;
+  double frame_rate;       /* frames/s, one chladni_paper_post_frame each; 0: 60 */
+  double contact_distance; /* m a vertex touches a plane within; 0: 0.002 */
+  double listener[9];      /* position, forward, up (m); all 0: (0,-0.5,0.3), +y, +z */
+  /* How it sounds (all sheets). */
+  const char* mode;     /* "database", "modal" or "both"; NULL: database when `database` is
+                           given, else modal (the sheet's own modes, no recordings needed) */
+  const char* database; /* a paper sound database folder (paper_db.json) at the runtime's rate */
+  uint64_t seed;        /* 0: 1 */
+  double gain;          /* 0: 1 */
+} chladni_paper_desc;
+
+/* Adds a paper sheet. CHLADNI_QUEUE_FULL when max_papers sheets are alive or ringing out.
+ * Control call. */
+chladni_status chladni_paper_add(chladni_runtime* runtime, const chladni_paper_desc* desc,
+                                 chladni_paper* paper);
+/* The sheet's next frame: `xyz` holds 3 floats (m) per vertex. `held` lists the vertices held
+ * this frame (fingers, clamps), replacing the animation's anchors; NULL keeps them (none for an
+ * inline sheet). Frames follow one another at desc.frame_rate: post one per animation frame.
+ * CHLADNI_QUEUE_FULL, the frame not taken, when the audio thread has not yet played what the
+ * earlier frames made (half a second or more is buffered): post it again after a render. Control
+ * call: the analysis allocates. */
+chladni_status chladni_paper_post_frame(chladni_runtime* runtime, chladni_paper paper,
+                                        const float* xyz, uint32_t vertex_count,
+                                        const uint32_t* held, uint32_t held_count);
+/* Ends a sheet: its sounds ring out (half a second) and it is freed after. Control call. */
+chladni_status chladni_paper_remove(chladni_runtime* runtime, chladni_paper paper);
 
 /* Renders `frames` interleaved frames into `out` (frames * channels floats, Pa at the
  * listener). Audio thread: no allocation, no lock, no wait beyond the filterbank's own work. */
