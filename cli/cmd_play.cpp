@@ -6,12 +6,14 @@
 #include <chrono>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <thread>
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/scene.hpp"
 #include "chladni/runtime/scene/scene_timeline.hpp"
 #include "commands.hpp"
+#include "play_churn.hpp"
 #include "scene_args.hpp"
 
 namespace chladni::cli {
@@ -21,13 +23,15 @@ struct PlayArgs : SceneArgs {
   std::string scene, api = "auto";
   int device = -1;
   uint32_t buffer = 256;
-  double duration = 0;
+  double duration = 0, churn = 0;
+  uint32_t churn_alive = 64;
   bool list = false;
 };
 
 // Shared between the callback (audio thread) and the main thread.
 struct Playback {
   runtime::SceneTimeline* timeline = nullptr;
+  PlayChurn* churn = nullptr;
   int channels = 2;
   uint64_t stop_at = 0;
   double budget_ms = 0;  // one buffer's duration
@@ -47,6 +51,7 @@ int callback(void* out, void*, unsigned int frames, double, RtAudioStreamStatus 
   const uint32_t n = static_cast<uint32_t>(std::min<uint64_t>(frames, p.stop_at - now));
   try {
     p.timeline->render(n, buf);
+    if (p.churn && !p.churn->mix(buf, n)) p.failed = true;
   } catch (...) {  // nothing may leave the audio thread; the main thread reports it
     p.failed = true;
   }
@@ -83,6 +88,11 @@ void list_devices(RtAudio& audio) {
 }
 
 void play(const PlayArgs& a, const Scene& scene) {
+  // Made before the stream and gone after it: the callback renders through it.
+  std::unique_ptr<PlayChurn> churn;
+  if (a.churn > 0)
+    churn = std::make_unique<PlayChurn>(a.churn, a.churn_alive, scene.sample_rate, scene.channels,
+                                        a.buffer);
   RtAudio audio(parse_api(a.api));
   if (audio.getDeviceCount() == 0)
     throw InputError("no audio device on " + RtAudio::getApiDisplayName(audio.getCurrentApi()) +
@@ -93,6 +103,7 @@ void play(const PlayArgs& a, const Scene& scene) {
   runtime::SceneTimeline timeline(scene, prepared);
   Playback p;
   p.timeline = &timeline;
+  p.churn = churn.get();
   p.channels = scene.channels;
   // A pipelined GPU hands the last samples back the filterbank's latency later.
   p.stop_at =
@@ -108,6 +119,7 @@ void play(const PlayArgs& a, const Scene& scene) {
                    &frames, &callback, &p, &options);
   const long latency = audio.getStreamLatency();
   p.budget_ms = 1e3 * frames / scene.sample_rate;
+  if (churn) churn->start();
   audio.startStream();
   const auto t0 = std::chrono::steady_clock::now();
   while (!p.done && audio.isStreamRunning())
@@ -115,6 +127,7 @@ void play(const PlayArgs& a, const Scene& scene) {
   while (audio.isStreamRunning()) std::this_thread::sleep_for(std::chrono::milliseconds(5));
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (audio.isStreamOpen()) audio.closeStream();
+  if (churn) churn->stop();
   if (p.failed) throw InternalError("play: the synthesis failed in the audio callback");
   if (!a.quiet) {
     const uint32_t fb_latency = prepared.filterbank->latency();
@@ -133,6 +146,12 @@ void play(const PlayArgs& a, const Scene& scene) {
   // Late callbacks are ours (the synthesis took longer than the buffer lasts); underruns are
   // what the server reported, which on a machine without real-time scheduling includes its own
   // late wake-ups.
+  if (churn)
+    std::printf(
+        "churn: %llu steel bars spawned and struck, the oldest of %u removed for each "
+        "(%llu spawns refused)\n",
+        static_cast<unsigned long long>(churn->spawned()), a.churn_alive,
+        static_cast<unsigned long long>(churn->refused()));
   std::printf("late callbacks %llu, underruns %llu", static_cast<unsigned long long>(p.late.load()),
               static_cast<unsigned long long>(p.underruns.load()));
   if (p.underruns)
@@ -172,6 +191,13 @@ void add_play(CLI::App& app) {
   cmd->add_option("--duration", a->duration, "Seconds to play (0: the scene's own end)")
       ->check(finite_in(0, 3600));
   cmd->add_flag("--list-devices", a->list, "List the API's output devices and stop");
+  cmd->add_option("--churn", a->churn,
+                  "A spawn storm beside the scene: spawn and strike a steel bar this many times a "
+                  "second through the C API, removing the oldest (0: none)")
+      ->check(finite_in(0, 20000));
+  cmd->add_option("--churn-alive", a->churn_alive, "Bars alive at once in the storm")
+      ->check(CLI::Range(1, 4096))
+      ->capture_default_str();
   add_scene_options(*cmd, *a);
   cmd->callback([a] { run_play(*a); });
 }

@@ -10,9 +10,13 @@
 # callbacks" measures; on a shared machine a thread can also be scheduled late, so a run with
 # such a report but no late callback is tried again, up to three runs. A late callback, a short
 # play or an error fails at once.
-# Usage: play_test.sh CHLADNI SCENE
+# With more arguments (--churn N: a spawn storm through the C API beside the scene) they go to
+# chladni play, and the storm must have spawned at least N objects a second for the 10 s.
+# Usage: play_test.sh CHLADNI SCENE [PLAY OPTIONS...]
 set -euo pipefail
 chladni=$1 scene=$2
+shift 2
+extra=("$@")
 tmp=$(mktemp -d)
 export JACK_DEFAULT_SERVER="chladni_test_$$"
 server=
@@ -44,11 +48,18 @@ play_once() {
   start_server || return 1
   local before after late underruns woke
   before=$(grep -c 'Process XRun' "$tmp/jackd.log" || true)
-  "$chladni" play "$scene" --api jack --duration 10 --threads 1 | tee "$tmp/play.log" || return 1
+  "$chladni" play "$scene" --api jack --duration 10 --threads 1 "${extra[@]}" |
+    tee "$tmp/play.log" || return 1
   after=$(grep -c 'Process XRun' "$tmp/jackd.log" || true)
   late=$(sed -nE 's/^late callbacks ([0-9]+), underruns ([0-9]+).*/\1/p' "$tmp/play.log")
   underruns=$(sed -nE 's/^late callbacks ([0-9]+), underruns ([0-9]+).*/\2/p' "$tmp/play.log")
   grep -q '^played 10.000 s' "$tmp/play.log" || return 1
+  if [ "${#extra[@]}" -ge 2 ] && [ "${extra[0]}" = --churn ]; then
+    local spawned
+    spawned=$(sed -nE 's/^churn: ([0-9]+) steel bars.*/\1/p' "$tmp/play.log")
+    # 10 s of play, less the stream's start: 95 % of the rate asked for.
+    [ "${spawned:-0}" -ge $((extra[1] * 95 / 10)) ] || { echo "only ${spawned:-0} spawned" >&2; return 1; }
+  fi
   woke=$((after - before))
   echo "late callbacks $late, underruns $underruns, server's own late wake-ups $woke"
   [ "$late" -eq 0 ] || return 1
