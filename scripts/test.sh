@@ -18,7 +18,9 @@ cmake --build build/release -j "$jobs"
 ctest --test-dir build/release --output-on-failure --no-tests=error -j "$jobs"
 
 echo "== sanitizer build (ASan + UBSan, Debug, Vulkan validation) and tests"
-bash scripts/configure.sh asan build/asan
+# The CGAL units are built optimised and uninstrumented in both builds: this one links the
+# release build's (precompute/CMakeLists.txt, CHLADNI_PREBUILT_CGAL_UNITS).
+bash scripts/configure.sh asan build/asan -DCHLADNI_PREBUILT_CGAL_UNITS="$PWD/build/release"
 cmake --build build/asan -j "$jobs"
 # Lavapipe leaks a little per VkInstance and is dlclose'd before LeakSanitizer reports, which
 # leaves the leak unattributable; preloading it (after libasan, which must come first) keeps it
