@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iterator>
 #include <random>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -12,6 +13,7 @@
 #include "capi_fixtures.hpp"
 #include "chladni/chladni.h"
 #include "chladni/core/modal_model.hpp"
+#include "chladni/core/paper_animation.hpp"
 #include "chladni/runtime/filterbank/cpu_filterbank.hpp"
 #include "chladni/runtime/modal/object_modes.hpp"
 #include "test_support.hpp"
@@ -279,8 +281,12 @@ TEST(CApiLive, ShakersComeAndGoWhileTheirObjectPlays) {
 
 TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   // Hostile use: valid, stale and made-up handles, NaN and huge values, renders of any size,
-  // banks released under live objects, all interleaved at random.
+  // banks released under live objects, paper sheets posted frames of any shape (crushed to a
+  // point, flung 1e8 m, NaN), all interleaved at random.
   LiveRuntime r(8);
+  const std::string paper_path = CHLADNI_SOURCE_DIR "/meshes/paper/crumple.json";
+  const chladni::PaperAnimation paper = chladni::load_paper_animation(paper_path);
+  std::vector<chladni_paper> papers;
   std::mt19937 rng(2026);
   std::vector<chladni_bank> banks;
   std::vector<chladni_object> objects;
@@ -293,7 +299,7 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   for (int step = 0; step < 4000; ++step) {
     chladni_status s = CHLADNI_OK;
     const double t = chladni_runtime_time(r.rt) + (rng() % 3 ? 0.001 : any());
-    switch (rng() % 9) {
+    switch (rng() % 10) {
       case 0:
         banks.push_back(tone(r.rt, 200 + rng() % 4000));
         break;
@@ -337,6 +343,29 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
       case 7:
         s = chladni_object_move(r.rt, pick(objects, chladni_object{rng()}), t, kAt, kIdentity);
         break;
+      case 8: {
+        const uint32_t what = rng() % 8;
+        if (what == 0) {
+          chladni_paper_desc d{};
+          d.animation = paper_path.c_str();
+          d.listener[4] = rng() % 4 ? 0 : any();
+          chladni_paper p{0};
+          s = chladni_paper_add(r.rt, &d, &p);
+          if (s == CHLADNI_OK) papers.push_back(p);
+        } else if (what == 1) {
+          s = chladni_paper_remove(r.rt, pick(papers, chladni_paper{rng()}));
+        } else {
+          const std::span<const float> f = paper.frame(rng() % paper.frame_count());
+          std::vector<float> x(f.begin(), f.end());
+          const double warp = rng() % 3 ? 1.0 : any();  // crushed, flung, mirrored, NaN
+          for (float& c : x) c = float(c * warp);
+          const uint32_t held = rng() % (paper.vertex_count + 2);
+          s = chladni_paper_post_frame(r.rt, pick(papers, chladni_paper{rng()}), x.data(),
+                                       rng() % 6 ? paper.vertex_count : uint32_t(rng() % 400),
+                                       rng() % 3 ? nullptr : &held, 1);
+        }
+        break;
+      }
       default: {
         std::vector<float> out = r.render(uint32_t(rng() % 700));
         for (float x : out) ASSERT_TRUE(std::isfinite(x));
@@ -348,10 +377,14 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   for (chladni_shaker k : shakers) chladni_shaker_remove(r.rt, k);
   for (chladni_object o : objects) chladni_object_remove(r.rt, o);
   for (chladni_bank b : banks) chladni_bank_release(r.rt, b);
-  r.render(512);
+  for (chladni_paper p : papers) chladni_paper_remove(r.rt, p);
+  // What the sheets buffered (up to 1.5 s) and their tails, then silence.
+  for (int k = 0; k < 4; ++k)
+    for (float x : r.render(48000)) ASSERT_TRUE(std::isfinite(x));
   EXPECT_EQ(chladni::test::max_abs(r.render(256)), 0.0);
   r.rt->reclaim();
   EXPECT_TRUE(r.rt->banks.empty());
   EXPECT_EQ(r.rt->free_places.size(), 8u);
   EXPECT_EQ(r.rt->free_shaker_places.size(), r.rt->max_shakers());
+  EXPECT_EQ(r.rt->free_paper_places.size(), r.rt->config.max_papers);
 }

@@ -2,6 +2,7 @@
 // samples `chladni paper` renders from the same animation, at the time the API promises.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -277,4 +278,28 @@ TEST(CApiPaper, RefusesWhatCannotPlay) {
             CHLADNI_OK)
       << chladni_last_error();
   for (float v : out) ASSERT_TRUE(std::isfinite(v));
+}
+
+// A sheet that follows the listener is heard from where chladni_listener_set puts it: from the
+// sheet's right the right ear is louder, from its left the left one; without following, the
+// animation's own listener hears it the same both times.
+TEST(CApiPaper, AFollowerHearsTheListenerWhereTheGameMovesIt) {
+  const PaperAnimation a = load_paper_animation(kPaper + "crumple.json");
+  const auto energies = [&](double x, int follow) {
+    test::CApiRuntime rt([](chladni_config& c) { c.sample_rate = 44100; });
+    const double at[3] = {x, -0.3, 0.2}, forward[3] = {0, 1, 0}, up[3] = {0, 0, 1};
+    EXPECT_EQ(chladni_listener_set(rt.rt, 0, at, forward, up), CHLADNI_OK);
+    chladni_paper_desc d{};
+    const std::string path = kPaper + "crumple.json";
+    d.animation = path.c_str();
+    d.follow_listener = follow;
+    const std::vector<float> out = post_animation(rt.rt, a, d, 30000);
+    std::array<double, 2> e{0, 0};
+    for (std::size_t i = 0; i < out.size(); ++i) e[i % 2] += double(out[i]) * out[i];
+    return e;
+  };
+  const auto right = energies(0.6, 1), left = energies(-0.6, 1);
+  EXPECT_GT(right[0], 1.5 * right[1]) << "the sheet on the listener's left";
+  EXPECT_GT(left[1], 1.5 * left[0]) << "the sheet on the listener's right";
+  EXPECT_EQ(energies(0.6, 0), energies(-0.6, 0));
 }

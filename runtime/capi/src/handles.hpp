@@ -199,7 +199,11 @@ struct chladni_runtime {
   std::vector<chladni::capi::PaperStream*> installed_papers;  // per paper place
   std::vector<chladni::capi::Command> pending;  // drained commands, by time; capacity fixed
   uint64_t lost_returns = 0;                    // returns dropped on a full queue (a bug)
-  uint64_t dropped_commands = 0;   // commands the player refused (values past what plays)
-  uint64_t now = 0;                // samples rendered (audio thread)
+  uint64_t dropped_commands = 0;  // commands the player refused (values past what plays)
+  uint64_t now = 0;               // samples rendered (audio thread)
+  // The listener chladni_listener_set last posted (game thread), for paper sheets that follow
+  // it (control thread): position, forward, up, under a sequence count (odd while written).
+  std::atomic<uint64_t> listener_seq{0};
+  std::atomic<double> listener[9] = {};
   std::atomic<uint64_t> clock{0};  // `now`, published for chladni_runtime_time on other threads
 };

@@ -312,7 +312,19 @@ chladni_status chladni_listener_set(chladni_runtime* rt, double time, const doub
       c.b[i] = f[i] / fn;
       c.c[i] = u[i] / un;
     }
-    return post(rt, c);
+    const chladni_status s = post(rt, c);
+    if (s == CHLADNI_OK) {  // a sequence lock: the paper sheets' reader retries a torn read
+      const uint64_t seq = rt->listener_seq.load(std::memory_order_relaxed);
+      rt->listener_seq.store(seq + 1, std::memory_order_relaxed);
+      std::atomic_thread_fence(std::memory_order_release);
+      for (int i = 0; i < 3; ++i) {
+        rt->listener[i].store(c.a[i], std::memory_order_relaxed);
+        rt->listener[3 + i].store(c.b[i], std::memory_order_relaxed);
+        rt->listener[6 + i].store(c.c[i], std::memory_order_relaxed);
+      }
+      rt->listener_seq.store(seq + 2, std::memory_order_release);
+    }
+    return s;
   });
 }
 

@@ -26,6 +26,8 @@ struct PaperSheet {
   uint32_t frame_samples = 0;  // output samples per animation frame, rounded up
   std::size_t reserve = 0;     // ring frames kept for the tail after the last frame
   float gain = 1;
+  bool follow = false;  // hears the runtime's listener
+  uint64_t heard = 0;   // the listener's sequence count last taken
   bool ended = false;
 };
 
@@ -130,6 +132,9 @@ std::unique_ptr<PaperSheet> make_sheet(const chladni_runtime& rt, const chladni_
       std::make_unique<PaperStream>(2 * (static_cast<std::size_t>(std::ceil(0.5 * o.sample_rate)) +
                                          s->reserve + 2 * std::size_t{s->frame_samples}));
   s->gain = d.gain == 0 ? 1.0f : static_cast<float>(d.gain);
+  if (d.follow_listener != 0 && d.follow_listener != 1)
+    throw InputError("follow_listener must be 0 or 1");
+  s->follow = d.follow_listener == 1;
   return s;
 }
 
@@ -139,6 +144,23 @@ PaperSheet& live_sheet(chladni_runtime* rt, chladni_paper paper) {
       rt->papers[k]->ended)
     throw InputError("no paper sheet " + std::to_string(paper.id) + " (never added, or removed)");
   return *rt->papers[k];
+}
+
+// A follower takes the listener chladni_listener_set last posted, when it has moved since; a read
+// torn by a concurrent set is left for the next frame.
+void follow_listener(const chladni_runtime& rt, PaperSheet& s) {
+  const uint64_t seq = rt.listener_seq.load(std::memory_order_acquire);
+  if (!s.follow || seq == s.heard || seq % 2) return;
+  double v[9];
+  for (int i = 0; i < 9; ++i) v[i] = rt.listener[i].load(std::memory_order_relaxed);
+  std::atomic_thread_fence(std::memory_order_acquire);
+  if (rt.listener_seq.load(std::memory_order_relaxed) != seq) return;
+  PaperListener l = s.anim.listener;  // its ear distance
+  l.position = {v[0], v[1], v[2]};
+  l.forward = {v[3], v[4], v[5]};
+  l.up = {v[6], v[7], v[8]};
+  s.renderer->set_listener(l);
+  s.heard = seq;
 }
 
 // Moves up to `frames` of the renderer's final audio, scaled by the sheet's gain, to its ring.
@@ -248,6 +270,7 @@ chladni_status chladni_paper_post_frame(chladni_runtime* rt, chladni_paper paper
                  "the audio thread; post this frame again after a render");
       return CHLADNI_QUEUE_FULL;
     }
+    follow_listener(*rt, s);
     s.renderer->step({xyz, std::size_t(vertex_count) * 3}, held ? &s.held : nullptr);
     if (s.stream->start.load(std::memory_order_relaxed) == PaperStream::kNotStarted)
       s.stream->start.store(

@@ -33,6 +33,11 @@ void PaperRenderer::end() {
   report_.audio_seconds = double(ended_) / opt_.sample_rate;
 }
 
+void PaperRenderer::set_listener(const PaperListener& listener) {
+  ears_ = ear_positions(listener);
+  head_ = listener.position;
+}
+
 std::size_t PaperRenderer::ready() const {
   // Final: every path has rendered past it, and no frame to come can start a sound before it
   // (a crumple clip starts at its frame's sample or later).

@@ -234,6 +234,8 @@ typedef struct chladni_paper_desc {
   double frame_rate;       /* frames/s, one chladni_paper_post_frame each; 0: 60 */
   double contact_distance; /* m a vertex touches a plane within; 0: 0.002 */
   double listener[9];      /* position, forward, up (m); all 0: (0,-0.5,0.3), +y, +z */
+  int follow_listener;     /* 1: heard from where chladni_listener_set last put the listener
+                              (once it has been set), updated at each posted frame */
   /* How it sounds (all sheets). */
   const char* mode;     /* "database", "modal" or "both"; NULL: database when `database` is
                            given, else modal (the sheet's own modes, no recordings needed) */

@@ -98,6 +98,9 @@ class PaperRenderer {
   void read(float* out, std::size_t frames);
   /// The frame the next step analyses.
   std::uint32_t next_frame() const { return next_frame_; }
+  /// Hears the sounds started from now on from `listener` (a game's moving camera); sounds
+  /// already playing keep their paths.
+  void set_listener(const PaperListener& listener);
 
  private:
   struct FrictionSource {
