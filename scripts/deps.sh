@@ -14,14 +14,15 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev libstk-dev
   zlib1g-dev libfftw3-dev libkissfft-dev libnlopt-dev libcairo2-dev fonts-dejavu-core libpng-dev libspectra-dev libtet1.5-dev libcgal-dev libsuitesparse-dev libopenblas-dev
   libhmat-oss-dev
-  librtaudio-dev libjack-jackd2-dev jackd2 libbullet-dev
+  librtaudio-dev libjack-jackd2-dev jackd2 libbullet-dev libsdl2-dev
   clang-format clang libclang-rt-14-dev llvm
   time  # /usr/bin/time: peak memory in bench/no_options_bench.sh
 )
 # `deps.sh tests` adds what only the tests need: Chromium, for the browser tests of the HTML
-# report (driven over the DevTools pipe; its WebGL runs on SwiftShader, no GPU needed).
+# report (driven over the DevTools pipe; its WebGL runs on SwiftShader, no GPU needed), and a
+# virtual X server for the windowed renderer example (xvfb-run needs xauth).
 if [[ "${1:-}" == "tests" ]]; then
-  PACKAGES+=(chromium)
+  PACKAGES+=(chromium xvfb xauth)
 fi
 
 missing=()

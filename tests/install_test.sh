@@ -60,4 +60,10 @@ test "$(grep -c ',impact,' "$tmp/f.csv")" -gt 4
 test "$(grep -c ',scrape,' "$tmp/f.csv")" -gt 0  # sliding bodies scrape
 awk '/first impact at/ { i = $(NF-9); s = $(NF-4); d = s - i; if (i < 0 || d < 0 || d > 0.001) exit 1 }' \
   "$tmp/f.out"
-echo "installed package: find_package and pkg-config builds run (static and shared), and so does the Bullet host"
+# The windowed renderer example builds against the package as shown in its CMakeLists.txt (the
+# test RendererExample.* runs it, headless).
+cmake -S "$src/examples/renderer" -B "$tmp/renderer" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$tmp/prefix" > "$tmp/renderer-configure.log"
+cmake --build "$tmp/renderer" > "$tmp/renderer-build.log"
+test -x "$tmp/renderer/renderer"
+echo "installed package: find_package and pkg-config builds run (static and shared), and so does the Bullet host; the renderer example builds"
