@@ -22,7 +22,7 @@ class Physics {
 
   explicit Physics(chladni_runtime* rt);
   ~Physics();
-  /// Steps the world at 240 Hz up to `seconds` of wall time, posting what happened.
+  /// Steps the world at 240 Hz up to `seconds` (the audio clock), posting what happened.
   void advance_to(double seconds, FILE* log);
   /// The bodies and the floor seen from the front (x right, z up), in a w x h window.
   std::vector<Rect> rects(int w, int h) const;
