@@ -46,9 +46,8 @@ struct PaperStream {
   // written (the ring's release publishes it).
   std::atomic<uint64_t> start{kNotStarted};
   std::atomic<bool> ended{false};  // nothing more will be written
-  float gain = 1;
-  // Audio thread: stereo frames consumed, and those dropped for arriving after their time.
-  uint64_t consumed = 0, late = 0;
+  // Audio thread: stereo frames consumed (played, or dropped for arriving after their time).
+  uint64_t consumed = 0;
 };
 
 // Control -> audio: an object or a shaker to place, or one to remove; a paper stream to mix.

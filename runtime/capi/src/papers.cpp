@@ -207,7 +207,6 @@ void chladni_runtime::mix_papers(float* out, uint64_t start, uint32_t frames) {
       }
       p->ring.consume(2 * (late + play));
       p->consumed += late + play;
-      p->late += late;
     }
     if (ended && p->ring.size() == 0) {
       installed_papers[k] = nullptr;

@@ -6,21 +6,26 @@
 #include <memory>
 #include <new>
 #include <stdexcept>
+#include <string>
 
 namespace chladni::runtime {
+
+/// The index mask of a ring holding `capacity` items rounded up to a power of two; `what` names
+/// the ring in the error for a capacity outside [1, 2^30].
+inline std::size_t ring_mask(std::size_t capacity, const char* what) {
+  if (capacity == 0 || capacity > (std::size_t{1} << 30))
+    throw std::invalid_argument(std::string(what) + " capacity must be in [1, 2^30]");
+  std::size_t n = 1;
+  while (n < capacity) n <<= 1;
+  return n - 1;
+}
 
 template <class T>
 class SpscQueue {
  public:
   /// Holds up to `capacity` items (rounded up to a power of two).
-  explicit SpscQueue(std::size_t capacity) {
-    if (capacity == 0 || capacity > (std::size_t{1} << 30))
-      throw std::invalid_argument("queue capacity must be in [1, 2^30]");
-    std::size_t n = 1;
-    while (n < capacity) n <<= 1;
-    mask_ = n - 1;
-    items_ = std::make_unique<T[]>(n);
-  }
+  explicit SpscQueue(std::size_t capacity)
+      : mask_(ring_mask(capacity, "queue")), items_(std::make_unique<T[]>(mask_ + 1)) {}
   /// Producer: false (and nothing queued) when full.
   bool push(const T& item) {
     const std::size_t tail = tail_.load(std::memory_order_relaxed);
@@ -46,8 +51,8 @@ class SpscQueue {
   std::size_t capacity() const { return mask_ + 1; }
 
  private:
+  std::size_t mask_;  // before items_, which is sized from it
   std::unique_ptr<T[]> items_;
-  std::size_t mask_ = 0;
   // Each side's index on its own cache line, with its cached view of the other side's.
   alignas(64) std::atomic<std::size_t> head_{0};
   std::size_t tail_cache_ = 0;
@@ -59,14 +64,8 @@ class SpscQueue {
 /// thread writes (the control thread's paper sheet), one reads (the audio thread).
 class SpscRing {
  public:
-  explicit SpscRing(std::size_t capacity) {
-    if (capacity == 0 || capacity > (std::size_t{1} << 30))
-      throw std::invalid_argument("ring capacity must be in [1, 2^30]");
-    std::size_t n = 1;
-    while (n < capacity) n <<= 1;
-    mask_ = n - 1;
-    items_ = std::make_unique<float[]>(n);
-  }
+  explicit SpscRing(std::size_t capacity)
+      : mask_(ring_mask(capacity, "ring")), items_(std::make_unique<float[]>(mask_ + 1)) {}
   /// Producer: room for this many floats.
   std::size_t room() const {
     return mask_ + 1 -
@@ -94,8 +93,8 @@ class SpscRing {
   }
 
  private:
+  std::size_t mask_;  // before items_, which is sized from it
   std::unique_ptr<float[]> items_;
-  std::size_t mask_ = 0;
   alignas(64) std::atomic<std::size_t> head_{0};
   alignas(64) std::atomic<std::size_t> tail_{0};
 };

@@ -1,8 +1,10 @@
-// PaperRenderer's live side: frames from the caller, audio taken as it becomes final. The
-// output is a window from out_base_ that grows ahead as sounds start and shrinks from the front
-// as it is read, so a live sheet holds about one crumple clip of audio however long it plays.
+// PaperRenderer's output window and live side: frames from the caller, audio taken as it becomes
+// final. The output is a window from out_base_ that grows ahead as sounds start and shrinks from
+// the front as it is read, so a live sheet holds about one crumple clip of audio however long it
+// plays; offline it is the whole sound, taken once by finish().
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 #include "chladni/core/error.hpp"
 #include "chladni/runtime/paper/paper_synth.hpp"
@@ -14,6 +16,32 @@ float* PaperRenderer::window(int ch, std::int64_t from, std::int64_t to) {
   const std::size_t need = static_cast<std::size_t>(to - out_base_);
   if (out.size() < need) out.resize(need, 0.0f);
   return out.data() + (from - out_base_);
+}
+
+void PaperRenderer::add_interleaved(std::int64_t at, const float* x, std::int64_t frames) {
+  float* left = window(0, at, at + frames);
+  float* right = window(1, at, at + frames);
+  for (std::int64_t i = 0; i < frames; ++i) {
+    left[i] += x[2 * i];
+    right[i] += x[2 * i + 1];
+  }
+}
+
+// A non-finite sample is a bug: reported, naming its frame, before anything moves.
+void PaperRenderer::take(float* out, std::size_t frames) {
+  const std::int64_t n = static_cast<std::int64_t>(frames);
+  const float* left = window(0, out_base_, out_base_ + n);
+  const float* right = window(1, out_base_, out_base_ + n);
+  for (std::size_t t = 0; t < frames; ++t)
+    if (!std::isfinite(left[t]) || !std::isfinite(right[t]))
+      throw InternalError("paper synthesis produced a non-finite sample at frame " +
+                          std::to_string(out_base_ + std::int64_t(t)));
+  for (std::size_t t = 0; t < frames; ++t) {
+    out[2 * t] = left[t];
+    out[2 * t + 1] = right[t];
+  }
+  for (auto& ch : out_) ch.erase(ch.begin(), ch.begin() + n);
+  out_base_ += n;
 }
 
 const PaperFrameAnalysis& PaperRenderer::step(std::span<const float> xyz,
@@ -49,15 +77,7 @@ std::size_t PaperRenderer::ready() const {
 
 void PaperRenderer::read(float* out, std::size_t frames) {
   if (frames > ready()) throw InternalError("PaperRenderer::read past the final samples");
-  const std::int64_t n = static_cast<std::int64_t>(frames);
-  float* left = window(0, out_base_, out_base_ + n);
-  float* right = window(1, out_base_, out_base_ + n);
-  for (std::size_t t = 0; t < frames; ++t) {
-    out[2 * t] = left[t];
-    out[2 * t + 1] = right[t];
-  }
-  for (auto& ch : out_) ch.erase(ch.begin(), ch.begin() + n);
-  out_base_ += n;
+  take(out, frames);
 }
 
 }  // namespace chladni::runtime

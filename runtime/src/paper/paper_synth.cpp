@@ -107,7 +107,8 @@ std::int64_t PaperRenderer::sample_of(std::uint32_t frame) const {
 }
 
 const PaperFrameAnalysis& PaperRenderer::step() {
-  if (done() || opt_.live) throw InternalError("PaperRenderer::step past the last frame");
+  if (opt_.live) throw InternalError("PaperRenderer::step() on a live renderer: step(xyz)");
+  if (done()) throw InternalError("PaperRenderer::step past the last frame");
   return step_at(anim_.frame(next_frame_), nullptr);
 }
 
@@ -187,15 +188,8 @@ AudioBuffer PaperRenderer::finish() {
   AudioBuffer a;
   a.sample_rate = static_cast<int>(opt_.sample_rate);
   a.channels = 2;
-  a.samples.resize(2 * out_[0].size());
-  for (std::size_t t = 0; t < out_[0].size(); ++t) {
-    a.samples[2 * t] = out_[0][t];
-    a.samples[2 * t + 1] = out_[1][t];
-  }
-  for (std::size_t i = 0; i < a.samples.size(); ++i)
-    if (!std::isfinite(a.samples[i]))
-      throw InternalError("paper synthesis produced a non-finite sample at frame " +
-                          std::to_string(i / 2));
+  a.samples.resize(2 * static_cast<std::size_t>(limit_));
+  take(a.samples.data(), static_cast<std::size_t>(limit_));
   return a;
 }
 
@@ -277,13 +271,8 @@ void PaperRenderer::render_friction_until(std::int64_t end) {
       }
     }
     noise_->hop(mags_, hop_out_.data());
-    const std::int64_t n = std::min<std::int64_t>(SpectralNoise::kHop, frames - friction_pos_);
-    float* left = window(0, friction_pos_, friction_pos_ + n);
-    float* right = window(1, friction_pos_, friction_pos_ + n);
-    for (std::int64_t i = 0; i < n; ++i) {
-      left[i] += hop_out_[2 * i];
-      right[i] += hop_out_[2 * i + 1];
-    }
+    add_interleaved(friction_pos_, hop_out_.data(),
+                    std::min<std::int64_t>(SpectralNoise::kHop, frames - friction_pos_));
     friction_pos_ += SpectralNoise::kHop;
   }
 }
@@ -413,13 +402,7 @@ void PaperRenderer::render_modal_until(std::int64_t end) {
         synth_->excite(c.voice, std::span(amps_.data(), m), static_cast<std::uint32_t>(offset));
     }
     synth_->render(n, block_.data());
-    const std::int64_t keep = std::min<std::int64_t>(n, frames - modal_pos_);
-    float* left = window(0, modal_pos_, modal_pos_ + keep);
-    float* right = window(1, modal_pos_, modal_pos_ + keep);
-    for (std::int64_t i = 0; i < keep; ++i) {
-      left[i] += block_[2 * i];
-      right[i] += block_[2 * i + 1];
-    }
+    add_interleaved(modal_pos_, block_.data(), std::min<std::int64_t>(n, frames - modal_pos_));
     modal_pos_ = block_end;
     // Crumple voices whose burst has rung out give their slots back.
     for (std::size_t i = 0; i < crumple_voices_.size();) {

@@ -140,6 +140,10 @@ class PaperRenderer {
   void render_tail(std::int64_t end);
   // Channel `ch` of the output from absolute sample `from` to `to`, grown to hold it.
   float* window(int ch, std::int64_t from, std::int64_t to);
+  // Adds `frames` interleaved stereo frames to the output from absolute sample `at`.
+  void add_interleaved(std::int64_t at, const float* x, std::int64_t frames);
+  // Moves the output's oldest `frames`, interleaved, to `out`.
+  void take(float* out, std::size_t frames);
 
   const PaperAnimation& anim_;
   const PaperSoundDb* db_;
