@@ -27,6 +27,7 @@
 #include "chladni/runtime/filterbank/make_filterbank.hpp"
 #include "chladni/runtime/phisem/shaker_bank.hpp"
 #include "chladni/runtime/scene/render.hpp"
+#include "synthetic_object.hpp"
 
 using namespace chladni;
 using namespace chladni::runtime;
@@ -35,25 +36,6 @@ namespace {
 
 constexpr double kFs = 48000;
 constexpr uint32_t kBlock = 256;
-
-ModalModel synthetic_object(std::size_t modes, std::size_t points) {
-  ModalModel m;
-  m.name = "synthetic";
-  Rng rng(3);
-  for (std::size_t i = 0; i < modes; ++i) {
-    const double hz = 60.0 * std::pow(16000.0 / 60.0, double(i) / double(modes - 1));
-    m.omega.push_back(2 * std::numbers::pi * hz);
-    m.decay.push_back(1.0 + 2e-4 * hz);
-    m.radiation.push_back(1e-4);
-  }
-  for (std::size_t p = 0; p < points; ++p) {
-    m.points.push_back({rng.normal(), rng.normal(), rng.normal()});
-    m.normals.push_back({0, 0, 1});
-  }
-  for (std::size_t i = 0; i < modes * points; ++i)
-    m.shapes.push_back({rng.normal(), rng.normal(), rng.normal()});
-  return m;
-}
 
 struct Result {
   std::string load, backend, device;
@@ -181,7 +163,7 @@ int main(int argc, char** argv) {
   bells.resonances.resize(4);
   std::vector<ShakerVoice> shakers(1000, instrument_voice(bells, kFs));
   // Load 2: 100 voices of gravel on a 1,000-mode object.
-  const ModalModel model = synthetic_object(1000, 256);
+  const ModalModel model = bench::synthetic_object(1000, 256);
   const ObjectModes object = object_modes(model);
   std::vector<ShakerVoice> objects;
   for (int v = 0; v < 100; ++v)

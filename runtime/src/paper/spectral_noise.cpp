@@ -1,45 +1,18 @@
 #include "chladni/runtime/paper/spectral_noise.hpp"
 
-#include <kiss_fftr.h>
-
 #include <cmath>
 #include <complex>
 #include <numbers>
 #include <string>
 #include <vector>
 
+#include "../real_fft.hpp"
 #include "chladni/core/error.hpp"
 
 namespace chladni::runtime {
-namespace {
-
-// A real FFT of size n (KISS FFT, BSD-3-clause: the runtime stays free of GPL code). Unnormalized
-// both ways: inverse(forward(x)) = n x.
-struct Plan {
-  kiss_fftr_cfg cfg = nullptr;
-  std::vector<float> real;
-  std::vector<kiss_fft_cpx> spec;
-  bool inverse;
-  Plan(std::size_t n, bool inv) : real(n), spec(n / 2 + 1), inverse(inv) {
-    cfg = kiss_fftr_alloc(int(n), inv ? 1 : 0, nullptr, nullptr);
-    if (!cfg)
-      throw InternalError("KISS FFT could not plan a transform of size " + std::to_string(n));
-  }
-  ~Plan() { kiss_fftr_free(cfg); }
-  Plan(const Plan&) = delete;
-  Plan& operator=(const Plan&) = delete;
-  void execute() {
-    if (inverse)
-      kiss_fftri(cfg, spec.data(), real.data());
-    else
-      kiss_fftr(cfg, real.data(), spec.data());
-  }
-};
-
-}  // namespace
 
 struct SpectralNoise::Fft {
-  Plan plan{SpectralNoise::kSize, true};
+  RealFft plan{SpectralNoise::kSize, true};
 };
 
 SpectralNoise::SpectralNoise(int channels, std::uint64_t seed)
@@ -64,7 +37,7 @@ void SpectralNoise::hop(std::span<const float> magnitudes, float* out) {
   }
   // |Y_k| = M_k sqrt(N); y = c2r(Y) / N has variance mean(M^2) (unnormalized inverse).
   const float scale = 1.0f / std::sqrt(float(kSize));
-  Plan& p = fft_->plan;
+  RealFft& p = fft_->plan;
   for (int c = 0; c < channels_; ++c) {
     const float* mag = magnitudes.data() + c * kBins;
     for (std::size_t k = 0; k < kBins; ++k) {
@@ -88,7 +61,7 @@ std::vector<float> friction_spectrum(std::span<const float> samples) {
                      " samples to measure its spectrum, this one has " +
                      std::to_string(samples.size()));
   }
-  Plan p(n, false);
+  RealFft p(n, false);
   std::vector<double> w(n), power(kFrictionBins, 0.0);
   double w2 = 0;
   for (std::size_t i = 0; i < n; ++i) {
