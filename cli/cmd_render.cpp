@@ -59,9 +59,14 @@ void render_loaded(const RenderArgs& a, Scene& scene, SampleFormat format) {
     std::printf("wrote %s\n", a.output.c_str());
   }
   if (!a.spectrogram.path.empty()) {
-    plot::Events marks{{}, scene.shakes.empty() ? "impacts" : "impacts and shakes"};
+    std::string what = "impacts";
+    if (!scene.shakes.empty()) what += ", shakes";
+    if (!scene.contacts.empty()) what += ", contact starts and ends";
+    plot::Events marks{{}, what};
     for (const auto& e : scene.events) marks.times.push_back(e.time);
     for (const auto& e : scene.shakes) marks.times.push_back(e.time);
+    for (const auto& e : scene.contacts)
+      marks.times.insert(marks.times.end(), {e.time, e.end_time()});
     write_spectrogram(a.spectrogram, audio,
                       "render " + a.scene + ": " + std::to_string(scene.objects.size()) +
                           " object" + (scene.objects.size() == 1 ? "" : "s") + " on " + fb->name(),

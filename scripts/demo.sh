@@ -38,11 +38,15 @@ $chladni shake tambourine -o out/tambourine.wav --duration 3 --shakes-per-second
   --normalize -1 --spectrogram out/tambourine.png
 $chladni render examples/gravel_in_bowl.json -o out/gravel_in_bowl.wav --normalize -1 \
   --spectrogram out/gravel_in_bowl.png
+# Continuous contact: the bar dragged across the bowl's rim, then a ball rolling inside it.
+$chladni render examples/scrape_and_roll.json -o out/scrape_and_roll.wav --normalize -1 \
+  --spectrogram out/scrape_and_roll.png
 # Estimation: a recorded glockenspiel note's partials and the damping curve through them (the
 # steel preset's), its resynthesis, and the spectrograms with the curve.
 $chladni estimate recordings/glockenspiel_C6.wav --end 0.798 --json out/glockenspiel.json \
   --resynth out/glockenspiel_resynth.wav --plot out/glockenspiel.png
 echo "demo: wrote out/bowl_and_bar.wav, out/bowl_and_bar_gpu.wav, out/struck_bar.wav," \
-  "out/paper_slide.wav, out/paper_crumple.wav, out/tambourine.wav, out/gravel_in_bowl.wav and" \
+  "out/paper_slide.wav, out/paper_crumple.wav, out/tambourine.wav, out/gravel_in_bowl.wav," \
+  "out/scrape_and_roll.wav and" \
   "out/glockenspiel_resynth.wav, each with its labelled spectrogram (.png beside it);" \
   "out/bowl_info.png and the bowl's HTML report, out/bowl_report/index.html"

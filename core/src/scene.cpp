@@ -10,6 +10,7 @@
 
 #include "chladni/core/error.hpp"
 #include "chladni/core/json_reader.hpp"
+#include "scene_parse.hpp"
 
 namespace chladni {
 namespace {
@@ -20,15 +21,9 @@ using json_reader::Obj;
 using json_reader::read_json_file;
 using nlohmann::json;
 
-// A render holds its whole output in memory, so a scene lasts at most an hour.
-constexpr double kMaxSceneSeconds = 3600;
-
-double event_time(Obj& o) {
-  const double t = o.number("time");
-  if (t < 0 || t > kMaxSceneSeconds)
-    fail(o.at("time"), "must lie in [0, 3600] s (a scene lasts at most an hour)");
-  return t;
-}
+using scene_parse::event_time;
+using scene_parse::find_object;
+using scene_parse::kMaxSceneSeconds;
 
 void parse_bar(Obj o, BarSpec& bar) {
   bar.length = o.positive("length", bar.length);
@@ -86,14 +81,6 @@ SceneObject parse_object(Obj o, const std::string& base_dir) {
   }
   o.done();
   return obj;
-}
-
-std::size_t find_object(Obj& o, const Scene& scene) {
-  const std::string name = o.string("object");
-  const auto it = std::find_if(scene.objects.begin(), scene.objects.end(),
-                               [&](const SceneObject& s) { return s.name == name; });
-  if (it == scene.objects.end()) fail(o.at("object"), "unknown object '" + name + "'");
-  return static_cast<std::size_t>(it - scene.objects.begin());
 }
 
 MoveEvent parse_move(Obj o, const Scene& scene, bool listener) {
@@ -166,6 +153,21 @@ ShakeEvent parse_shake(Obj o, const Scene& scene) {
 
 }  // namespace
 
+double scene_parse::event_time(Obj& o) {
+  const double t = o.number("time");
+  if (t < 0 || t > kMaxSceneSeconds)
+    fail(o.at("time"), "must lie in [0, 3600] s (a scene lasts at most an hour)");
+  return t;
+}
+
+std::size_t scene_parse::find_object(Obj& o, const Scene& scene, const std::string& key) {
+  const std::string name = o.string(key);
+  const auto it = std::find_if(scene.objects.begin(), scene.objects.end(),
+                               [&](const SceneObject& s) { return s.name == name; });
+  if (it == scene.objects.end()) fail(o.at(key), "unknown object '" + name + "'");
+  return static_cast<std::size_t>(it - scene.objects.begin());
+}
+
 Vec3 rotate(const Quat& q, const Vec3& v) {
   // v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z)
   const Vec3 u{q[1], q[2], q[3]};
@@ -229,9 +231,11 @@ Scene parse_scene(const json& j, const std::string& base_dir) {
       s.moves.push_back(parse_move(Obj(events[i], path), s, type == "listener"));
     else if (type == "shake")
       s.shakes.push_back(parse_shake(Obj(events[i], path), s));
+    else if (type == "contact")
+      s.contacts.push_back(scene_parse::parse_contact(Obj(events[i], path), s));
     else
       fail(peek.at("type"),
-           "unknown event type '" + type + "' (known: impact, move, listener, shake)");
+           "unknown event type '" + type + "' (known: impact, move, listener, shake, contact)");
   }
   root.done();
   std::stable_sort(s.events.begin(), s.events.end(),
@@ -240,6 +244,8 @@ Scene parse_scene(const json& j, const std::string& base_dir) {
                    [](const MoveEvent& a, const MoveEvent& b) { return a.time < b.time; });
   std::stable_sort(s.shakes.begin(), s.shakes.end(),
                    [](const ShakeEvent& a, const ShakeEvent& b) { return a.time < b.time; });
+  std::stable_sort(s.contacts.begin(), s.contacts.end(),
+                   [](const ContactEvent& a, const ContactEvent& b) { return a.time < b.time; });
   for (const MoveEvent& m : s.moves) {
     if (m.object) continue;
     const Vec3 f = m.forward.value_or(s.listener.forward), u = m.up.value_or(s.listener.up);

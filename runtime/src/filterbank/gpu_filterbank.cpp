@@ -312,8 +312,13 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
       }
     }
   }
+  if (input.device_rows > 0 && (!stage_ || input.device_rows > input.streams)) {
+    throw std::invalid_argument("process: device rows without a device stage");
+  }
   if (driven && input.samples) {
-    std::memcpy(inputs_->data(), input.samples, sizeof(float) * input.streams * frames);
+    const std::size_t skip = std::size_t{input.device_rows} * frames;
+    std::memcpy(static_cast<float*>(inputs_->data()) + skip, input.samples + skip,
+                sizeof(float) * (std::size_t{input.streams} * frames - skip));
   }
   if (excitations.size() > max_excitations_) {
     throw std::invalid_argument("process: more excitations than max_excitations()");
@@ -322,7 +327,7 @@ void GpuFilterbank::process(std::span<const Excitation> excitations, uint32_t fr
   const uint32_t ne = stage_excitations(excitations, frames);
   const uint32_t groups = div_up(high_water_, local_ * mpi_);
   const uint32_t count = frames * channels_;
-  record_block(frames, ne, groups, driven, driven && !input.samples);
+  record_block(frames, ne, groups, driven, driven && (!input.samples || input.device_rows > 0));
   processed_ += frames;
   if (!pipelined_) {
     seq_->run();

@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "chladni/gpu/context.hpp"
+#include "chladni/runtime/scene/scene_contacts.hpp"
 #include "chladni/runtime/scene/scene_timeline.hpp"
 
 namespace chladni::runtime {
@@ -17,13 +18,15 @@ PreparedScene prepare_scene(const Scene& scene, const SceneSettings& s) {
     transfer_modes += o.modes.transfer ? o.modes.modes.size() : 0;
   }
   p.shakers = scene_shakers(scene, p.objects, s.seed);
+  scene_contacts(scene, p.objects);  // refuses what cannot play before anything is sized
   const uint32_t budget =
       s.max_modes ? s.max_modes
                   : static_cast<uint32_t>(std::clamp<std::size_t>(total_modes, 1024, 1u << 20));
   FilterbankRequest r = s.filterbank;
   r.channels = scene.channels;
-  r.capacity = budget + p.shakers.slots;  // shake voices sit in slots above the impacts' budget
-  r.max_streams = static_cast<uint32_t>(p.shakers.voices.size());
+  // Shake voices and contacts sit in slots above the impacts' budget.
+  r.capacity = budget + p.shakers.slots + contact_slots(scene, p.objects);
+  r.max_streams = static_cast<uint32_t>(p.shakers.voices.size() + scene.contacts.size());
   r.max_frames = std::max<uint32_t>(s.block, 256);
   p.filterbank = make_filterbank(r);
   p.options.block = s.block;

@@ -31,10 +31,28 @@ std::unique_ptr<ShakerBank> make_bank(Filterbank& fb, const PlayerOptions& o) {
   return std::make_unique<ShakerBank>(fb, bo);
 }
 
+std::unique_ptr<ContactBank> make_contacts(Filterbank& fb, const PlayerOptions& o) {
+  if (o.contact_slots == 0 || o.max_contacts == 0) return nullptr;
+  ContactBankOptions co;
+  co.sample_rate = o.sample_rate;
+  co.slots = o.contact_slots;
+  co.max_contacts = o.max_contacts;
+  co.stream_base = o.shaker_slots && o.max_shakers ? o.max_shakers : 0;
+  co.ramp = std::max<uint32_t>(fb.gain_ramp(), 1);
+  co.max_points = o.contact_points;
+  return std::make_unique<ContactBank>(fb, co);
+}
+
 }  // namespace
 
 ScenePlayer::ScenePlayer(Filterbank& fb, const PlayerOptions& o)
-    : fb_(fb), opt_(o), bank_(make_bank(fb, o)), synth_(fb, o.synth) {
+    : fb_(fb),
+      opt_(o),
+      bank_(make_bank(fb, o)),
+      contacts_(make_contacts(fb, o)),
+      synth_(fb, o.synth) {
+  if (contacts_)
+    drive_.assign(std::size_t{contacts_->streams() + o.max_contacts} * fb.max_frames(), 0.0f);
   if (!std::isfinite(o.gain)) throw InputError("scene gain must be finite");
   shakers_.reserve(o.max_shakers);
   retired_shakers_.reserve(o.max_shakers);
@@ -331,6 +349,7 @@ bool ScenePlayer::update_gains() {
   }
   for (std::size_t s = 0; s < shakers_.size(); ++s)  // remove() silenced the others once
     if (!shakers_[s].dead) apply_shaker_gains(static_cast<int>(s));
+  apply_contact_gains();
   dirty_ = false;
   ++gain_updates_;
   gain_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -339,8 +358,7 @@ bool ScenePlayer::update_gains() {
 
 void ScenePlayer::render(uint32_t frames, float* out) {
   update_gains();
-  const DriveInput drive = bank_ ? bank_->prepare(frames) : DriveInput{};
-  synth_.render(frames, out, drive);
+  synth_.render(frames, out, drive(frames));
   if (bank_) bank_->finish(frames);
   if (shakers_fading_ > 0) end_shaker_fades();
   for (std::size_t k = 0; fading_ > 0 && k < objects_.size(); ++k) {

@@ -9,11 +9,24 @@
 namespace chladni::runtime {
 namespace {
 
-// When the timeline's last sound starts: the last impact, or the last shake plus the time its
+// Seconds the slowest of a body's modes takes to ring down by 100 dB.
+double ring_seconds(const ObjectModes& o) {
+  double slowest = 1e9;
+  for (const ModeSpec& m : o.modes) slowest = std::min(slowest, std::max(m.decay, 1e-3));
+  return std::log(1e5) / slowest;
+}
+
+// When the timeline's last sound starts: the last impact, the last contact's end plus its
+// bodies' ring-down (the synth does not see their slots), or the last shake plus the time its
 // voices take to run out of energy and ring down to -100 dB.
-double last_event_time(const Scene& scene, const SceneShakers& shakers,
-                       const RenderOptions& options, double fs) {
+double last_event_time(const Scene& scene, const std::vector<ObjectModes>& objects,
+                       const SceneShakers& shakers, const RenderOptions& options, double fs) {
   double last = scene.events.empty() ? 0.0 : scene.events.back().time;
+  for (const ContactEvent& c : scene.contacts) {
+    double ring = ring_seconds(objects[c.object]);
+    if (c.other) ring = std::max(ring, ring_seconds(objects[*c.other]));
+    last = std::max(last, c.end_time() + std::min(ring, options.max_tail));
+  }
   if (scene.shakes.empty()) return last;
   double ring = 0;
   for (const ShakerVoice& v : shakers.voices) {
@@ -44,20 +57,25 @@ void apply_move(ScenePlayer& player, const MoveEvent& mv) {
   }
 }
 
-PlayerOptions player_options(const Scene& scene, std::size_t objects, const SceneShakers& shakers,
-                             const RenderOptions& options) {
+PlayerOptions player_options(const Scene& scene, const std::vector<ObjectModes>& objects,
+                             const SceneShakers& shakers, const RenderOptions& options,
+                             uint32_t max_frames) {
   PlayerOptions po;
   po.sample_rate = scene.sample_rate;
   po.gain = scene.gain;
   po.synth = options.synth;
   po.synth.sample_rate = scene.sample_rate;
-  po.synth.max_voices = std::max<uint32_t>(po.synth.max_voices, static_cast<uint32_t>(objects));
+  po.synth.max_voices =
+      std::max<uint32_t>(po.synth.max_voices, static_cast<uint32_t>(objects.size()));
   po.gain_device = options.gain_device;
   po.gpu_gain_modes = options.gpu_gain_modes;
   po.map_gain_modes = options.map_gain_modes;
   po.shaker_slots = shakers.slots;
   po.max_shakers = static_cast<uint32_t>(shakers.voices.size());
   po.seed = options.seed;
+  po.max_contacts = static_cast<uint32_t>(scene.contacts.size());
+  po.contact_slots = contact_slots(scene, objects);
+  po.contact_points = contact_points_per_block(scene, max_frames);
   return po;
 }
 
@@ -75,7 +93,9 @@ SceneTimeline::SceneTimeline(const Scene& scene, const std::vector<ObjectModes>&
     : scene_(scene),
       fs_(scene.sample_rate),
       shakers_(std::move(shakers)),
-      player_(fb, player_options(scene, objects.size(), shakers_, options)),
+      contacts_(scene_contacts(scene, objects)),
+      contact_next_(contacts_.size(), 0),
+      player_(fb, player_options(scene, objects, shakers_, options, fb.max_frames())),
       objects_(objects),
       max_frames_(fb.max_frames()) {
   if (objects.size() != scene.objects.size()) throw InternalError("render: object count mismatch");
@@ -88,9 +108,14 @@ SceneTimeline::SceneTimeline(const Scene& scene, const std::vector<ObjectModes>&
     const ShakeEvent& ev = scene.shakes[shakers_.first_event[v]];
     player_.add_shaker(ev.object, shakers_.voices[v], ev.resonate_object);
   }
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    const ContactEvent& ev = scene.contacts[c];
+    player_.add_contact(ev.object, ev.other ? long(*ev.other) : -1, contacts_[c].roughness,
+                        options.seed + 0x1000 + c, ev.json_path);
+  }
   player_.finish_objects();
   player_.update_gains();
-  last_event_ = last_event_time(scene, shakers_, options, fs_);
+  last_event_ = last_event_time(scene, objects, shakers_, options, fs_);
   end_ = first_sample(scene.duration ? *scene.duration : last_event_ + options.max_tail, fs_);
 }
 
@@ -112,6 +137,7 @@ uint32_t SceneTimeline::render_step(uint32_t frames, float* out) {
     player_.shake(shakers_.voice[next_shake_], static_cast<float>(ev.energy),
                   static_cast<uint32_t>(at - t_));
   }
+  push_contacts(frames);
   player_.render(frames, out);
   t_ += frames;
   return frames;
@@ -122,6 +148,19 @@ void SceneTimeline::render(uint32_t frames, float* out) {
     const uint32_t n = render_step(frames, out);
     out += static_cast<std::size_t>(n) * scene_.channels;
     frames -= n;
+  }
+}
+
+// Queues each contact's points up to the first past this block (the interpolation needs it),
+// and ends a contact once its last point is queued.
+void SceneTimeline::push_contacts(uint32_t frames) {
+  for (std::size_t c = 0; c < contacts_.size(); ++c) {
+    const std::vector<ContactPoint>& pts = contacts_[c].points;
+    std::size_t& next = contact_next_[c];
+    while (next < pts.size() && (next == 0 || pts[next - 1].sample < t_ + frames)) {
+      if (!player_.push_contact(int(c), pts[next])) break;
+      if (++next == pts.size()) player_.end_contact(int(c), pts.back().sample);
+    }
   }
 }
 

@@ -89,6 +89,30 @@ struct ShakeEvent {
   double impulse = 1e-3;  ///< N*s per unit of excitation on the object's surface
 };
 
+/// The surface a contact traverses: a named preset (runtime/contact/surface_profile.hpp) and
+/// any fields overriding it.
+struct RoughnessSpec {
+  std::string surface = "steel";
+  std::optional<double> level, height, beta, shortest, longest, patch;
+};
+
+/// A continuous contact (sliding, rolling) on an object, optionally pressed against a second
+/// one: a trajectory of `samples` values at `rate` per second from `time` on, each field one
+/// value per sample or one for all (docs/scene-format.md).
+struct ContactEvent {
+  std::string json_path;
+  double time = 0;
+  std::size_t object = 0;
+  std::optional<std::size_t> other;
+  double rate = 100;                     ///< trajectory samples per second
+  std::size_t samples = 0;               ///< >= 2
+  std::vector<double> force;             ///< N (1 or `samples` values)
+  std::vector<double> slip, rolling;     ///< m/s (1 or `samples` values)
+  std::vector<Vec3> point, other_point;  ///< object frames (empty: the first surface point)
+  RoughnessSpec roughness;
+  double end_time() const { return time + double(samples - 1) / rate; }
+};
+
 struct Scene {
   int sample_rate = 48000;
   int channels = 2;
@@ -96,9 +120,10 @@ struct Scene {
   double gain = 1.0;
   Listener listener;
   std::vector<SceneObject> objects;
-  std::vector<ImpactEvent> events;  ///< sorted by time
-  std::vector<MoveEvent> moves;     ///< sorted by time
-  std::vector<ShakeEvent> shakes;   ///< sorted by time
+  std::vector<ImpactEvent> events;     ///< sorted by time
+  std::vector<MoveEvent> moves;        ///< sorted by time
+  std::vector<ShakeEvent> shakes;      ///< sorted by time
+  std::vector<ContactEvent> contacts;  ///< sorted by time
 };
 
 /// Parses a scene from JSON; `base_dir` resolves relative file names. Throws InputError whose

@@ -28,6 +28,9 @@ struct Excitation {
 struct DriveInput {
   const float* samples = nullptr;  ///< streams * frames, or nullptr (see GpuFilterbank)
   uint32_t streams = 0;
+  /// Rows [0, device_rows) are written by a GpuFilterbank's device input stage, the rest come
+  /// from `samples` (0: all from `samples`, or all from the stage where `samples` is null).
+  uint32_t device_rows = 0;
 };
 
 /// Stream index of an undriven slot.

@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "chladni/core/scene.hpp"
+#include "chladni/runtime/contact/contact_bank.hpp"
 #include "chladni/runtime/modal/synth.hpp"
 #include "chladni/runtime/modal/transfer_gains.hpp"
 #include "chladni/runtime/phisem/shaker_bank.hpp"
@@ -44,6 +45,11 @@ struct PlayerOptions {
   uint32_t shaker_slots = 0;
   uint32_t max_shakers = 0;
   uint64_t seed = 1;  ///< the shakers' random streams
+  /// Filterbank slots and contacts for continuous contacts (contact_bank.hpp), leased after the
+  /// shakers' and before the synth's; their input streams follow the shakers' (0: none).
+  uint32_t contact_slots = 0;
+  uint32_t max_contacts = 0;
+  uint32_t contact_points = 64;  ///< control points queued per contact
   /// Places reserved for objects, so that install() never allocates (0: grown as added).
   uint32_t max_objects = 0;
 };
@@ -110,6 +116,19 @@ class ScenePlayer {
   bool shake(int shaker, float energy, uint32_t offset);
   std::size_t shaker_count() const { return shakers_.size(); }
   std::size_t shaker_object(int shaker) const { return shakers_.at(shaker).object; }
+
+  /// A continuous contact on `object`, pressed against `other` where that is >= 0: its modes
+  /// (each body's) take the contact lease's slots and follow the objects' gains and pan. Silent
+  /// until its first point. Throws InputError (naming `name`) when the player has no room, the
+  /// roughness is out of range or an object is not live. Control thread.
+  int add_contact(std::size_t object, long other, const Roughness& roughness, uint64_t seed,
+                  const std::string& name);
+  /// Queues a control point of a contact (contact_bank.hpp); false when refused.
+  bool push_contact(int contact, const ContactPoint& point);
+  /// The contact's force fades out from absolute sample `sample`.
+  void end_contact(int contact, uint64_t sample);
+  /// null without contacts.
+  const ContactBank* contacts() const { return contacts_.get(); }
 
   void move(std::size_t object, const Vec3& position, const Quat& orientation);
   void set_listener(const Listener& listener);
@@ -179,11 +198,16 @@ class ScenePlayer {
   void retire(std::size_t object);
   void end_shaker_fades();
   void apply_shaker_gains(int shaker);
+  void apply_contact_gains();
+  DriveInput drive(uint32_t frames);
 
   Filterbank& fb_;
   PlayerOptions opt_;
-  std::unique_ptr<ShakerBank> bank_;  // leases its slots before the synth
+  std::unique_ptr<ShakerBank> bank_;       // leases its slots before the synth
+  std::unique_ptr<ContactBank> contacts_;  // and these after the shakers'
   Synth synth_;
+  std::vector<std::array<long, 2>> contact_objects_;  // per contact: its objects (-1: none)
+  std::vector<float> drive_;  // the shakers' and contacts' input rows, when both play
   std::vector<Shaker> shakers_;
   std::size_t fading_ = 0;  // removed objects still fading out
   std::size_t shakers_fading_ = 0;

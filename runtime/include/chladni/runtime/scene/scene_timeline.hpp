@@ -9,6 +9,7 @@
 #include "chladni/runtime/phisem/shaker_bank.hpp"
 #include "chladni/runtime/scene/prepare_scene.hpp"
 #include "chladni/runtime/scene/render.hpp"
+#include "chladni/runtime/scene/scene_contacts.hpp"
 #include "chladni/runtime/scene/scene_player.hpp"
 
 namespace chladni::runtime {
@@ -43,10 +44,13 @@ class SceneTimeline {
  private:
   uint32_t apply_moves(uint32_t frames);
   uint32_t apply_impacts(uint32_t frames);
+  void push_contacts(uint32_t frames);
 
   const Scene& scene_;
   double fs_;
   SceneShakers shakers_;
+  std::vector<SceneContact> contacts_;
+  std::vector<std::size_t> contact_next_;  // per contact: its next point to queue
   ScenePlayer player_;
   const std::vector<ObjectModes>& objects_;
   uint32_t max_frames_;

@@ -1,0 +1,69 @@
+#pragma once
+// The roughness a continuous contact traverses: a band-limited fractal height profile along the
+// path, spatial power spectrum P(k) = C k^-beta for wavenumbers k (cycles/m) between 1/longest and
+// 1/shortest, normalized to unit variance (van den Doel, Kry & Pai, "FoleyAutomatic", SIGGRAPH
+// 2001: a 1/f^beta surface read at the contact speed, kept as a looped table). Besides the height,
+// the table holds the curvature of the profile as a rolling contact sees it: smoothed by its
+// contact patch, H(k) = exp(-(pi k a)^2 / 2) for a patch of diameter a (FoleyAutomatic's rolling
+// model; Conan et al., Computer Music Journal 38:4, 2014, where rolling is the surface seen
+// through the contact area).
+//
+// Read at speed v, a wavenumber k sounds at v k Hz. Each table is kept at levels that halve its
+// band, and a read blends the two levels that keep every component below Nyquist (a texture's
+// mipmap, in one dimension), so a fast slide never aliases.
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace chladni::runtime {
+
+struct Roughness {
+  std::string name;
+  /// Sliding: rms of the force's fluctuation per newton of normal force.
+  double level = 0.1;
+  /// Rolling: rms height of the profile (m).
+  double height = 2e-6;
+  double beta = 2;         ///< spectral exponent of the height profile
+  double shortest = 2e-4;  ///< shortest wavelength on the surface (m)
+  double longest = 2e-2;   ///< longest (m)
+  double patch = 1e-3;     ///< rolling contact patch diameter (m)
+};
+
+/// Surfaces by material: steel, aluminium, glass, ceramic, wood, stone, plastic.
+const std::vector<Roughness>& roughness_presets();
+/// Throws InputError naming the known surfaces.
+const Roughness& roughness_preset(std::string_view name);
+/// Throws InputError naming the first field out of range.
+void validate_roughness(const Roughness& r);
+
+class SurfaceProfile {
+ public:
+  /// Builds the tables (allocates about 2 MB; a control thread). `seed` draws the phases.
+  explicit SurfaceProfile(const Roughness& roughness, uint64_t seed = 1);
+
+  struct Read {
+    float height;     ///< unit-rms profile at s
+    float curvature;  ///< d^2/ds^2 of the patch-smoothed unit-rms profile (1/m^2)
+  };
+  /// The profile at position `s` (m, any value: the table loops) with only the wavenumbers that
+  /// a speed of `speed` m/s keeps below `nyquist` Hz. Allocates nothing.
+  Read read(double s, double speed, double nyquist) const;
+
+  /// One-sided power spectral density of the unit-rms height per cycle/m at wavenumber k.
+  double psd(double k) const;
+  /// The patch's smoothing at wavenumber k.
+  double patch_response(double k) const;
+  double length() const { return length_; }  ///< the loop (m)
+  const Roughness& roughness() const { return r_; }
+
+ private:
+  Roughness r_;
+  std::size_t n_ = 0;  // samples per level
+  double dx_ = 0, length_ = 0, k_top_ = 0, c_ = 0;
+  int levels_ = 0;
+  std::vector<float> height_, curvature_;  // level-major, n_ + 1 each (the first repeated)
+};
+
+}  // namespace chladni::runtime
