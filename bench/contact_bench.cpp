@@ -106,7 +106,7 @@ int main(int argc, char** argv) {
       next_point += step;
     }
     const auto t0 = bench::clock_type::now();
-    bank.prepare(now, kBlock, rows.data());
+    bank.render(now, kBlock, rows.data());
     const auto t1 = bench::clock_type::now();
     fb->process({}, kBlock, out.data(), {rows.data(), bank.streams()});
     const double e = std::chrono::duration<double>(t1 - t0).count() * 1e3;

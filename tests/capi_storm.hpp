@@ -1,8 +1,9 @@
 #pragma once
 // A game's scene changing under the C API while the caller renders: a control thread spawning
 // and removing objects (about a thousand of each per second) from banks it loads and releases,
-// adding gravel to a third of them and taking some of it out again, and a game thread posting
-// impacts, moves and shakes to whichever objects and shakers are live. Shared by the
+// adding gravel to a third of them and taking some of it out again, and scraping another third
+// (a continuous contact removed with its object), and a game thread posting impacts, moves,
+// shakes and contact states to whichever objects, shakers and contacts are live. Shared by the
 // thread test (under ThreadSanitizer) and the allocation test (counting on the audio thread).
 #include <atomic>
 #include <chrono>
@@ -32,6 +33,7 @@ class CApiStorm {
   explicit CApiStorm(chladni_runtime* rt) : rt_(rt) {
     for (auto& id : live_) id.store(0);
     for (auto& id : gravel_) id.store(0);
+    for (auto& id : scrapes_) id.store(0);
   }
   ~CApiStorm() { stop(); }
 
@@ -48,6 +50,9 @@ class CApiStorm {
   void clear() {
     for (auto& id : gravel_)
       if (const uint64_t v = id.exchange(0)) note(chladni_shaker_remove(rt_, {v}), "remove shaker");
+    for (auto& id : scrapes_)
+      if (const uint64_t v = id.exchange(0))
+        note(chladni_contact_remove(rt_, {v}), "remove contact");
     for (auto& id : live_)
       if (const uint64_t v = id.exchange(0)) note(chladni_object_remove(rt_, {v}), "remove");
     for (chladni_bank b : banks_) note(chladni_bank_release(rt_, b), "release");
@@ -55,7 +60,7 @@ class CApiStorm {
   }
 
   std::atomic<long> spawned{0}, removed{0}, loaded{0}, released{0}, impacts{0}, moves{0}, shaken{0},
-      shakers_added{0}, shakers_removed{0}, gone{0}, full{0};
+      shakers_added{0}, shakers_removed{0}, contacts_added{0}, contact_states{0}, gone{0}, full{0};
   std::string unexpected;  // the first status no caller should see (control thread's)
   std::atomic<bool> game_unexpected{false};
 
@@ -84,7 +89,9 @@ class CApiStorm {
     banks_ = {load(rng), load(rng), load(rng)};
     for (long n = 0; running_.load(); ++n) {
       std::atomic<uint64_t>& place = live_[n % kLive];
-      gravel_[n % kLive].store(0);  // goes with its object
+      gravel_[n % kLive].store(0);                             // goes with its object
+      if (const uint64_t c = scrapes_[n % kLive].exchange(0))  // ends with it, freed here
+        note(chladni_contact_remove(rt_, {c}), "remove contact");
       if (const uint64_t old = place.exchange(0)) {
         note(chladni_object_remove(rt_, {old}), "remove");
         ++removed;
@@ -97,6 +104,7 @@ class CApiStorm {
         place.store(o.id);
         ++spawned;
         if (n % 3 == 0) add_gravel(o, gravel_[n % kLive]);
+        if (n % 3 == 1) add_scrape(o, scrapes_[n % kLive]);
       } else if (s == CHLADNI_QUEUE_FULL) {
         ++full;  // every place is alive or fading out: the audio thread is behind
       } else {
@@ -130,6 +138,21 @@ class CApiStorm {
       note(s, "add shaker");
     }
   }
+  void add_scrape(chladni_object o, std::atomic<uint64_t>& into) {
+    chladni_contact_desc d{};
+    d.object = o;
+    d.surface = "stone";
+    chladni_contact c{0};
+    const chladni_status s = chladni_contact_add(rt_, &d, &c);
+    if (s == CHLADNI_OK) {
+      into.store(c.id);
+      ++contacts_added;
+    } else if (s == CHLADNI_QUEUE_FULL) {
+      ++full;  // every contact place is alive or ringing down
+    } else {
+      note(s, "add contact");
+    }
+  }
   void game() {
     std::mt19937 rng(5);
     const double q[4] = {1, 0, 0, 0};
@@ -138,7 +161,17 @@ class CApiStorm {
       if (!id) continue;
       const double t = chladni_runtime_time(rt_) + 0.002;
       chladni_status s;
-      if (n % 5 == 4) {
+      if (n % 7 == 6) {
+        const uint64_t c = scrapes_[rng() % kLive].load();
+        if (!c) continue;
+        chladni_contact_state st{};
+        st.time = t;
+        st.normal_force = 1 + 0.1 * (n % 10);
+        st.slip_speed = 0.05 * (n % 8);
+        st.rolling_speed = 0.02 * (n % 5);
+        s = chladni_contact_post(rt_, {c}, &st);
+        if (s == CHLADNI_OK) ++contact_states;
+      } else if (n % 5 == 4) {
         const uint64_t g = gravel_[rng() % kLive].load();
         if (!g) continue;
         s = chladni_shaker_shake(rt_, {g}, t, 0.5);
@@ -170,7 +203,7 @@ class CApiStorm {
 
   chladni_runtime* rt_;
   std::atomic<bool> running_{true};
-  std::atomic<uint64_t> live_[kLive], gravel_[kLive];
+  std::atomic<uint64_t> live_[kLive], gravel_[kLive], scrapes_[kLive];
   std::vector<chladni_bank> banks_;
   std::thread control_, game_;
 };

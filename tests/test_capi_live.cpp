@@ -282,7 +282,8 @@ TEST(CApiLive, ShakersComeAndGoWhileTheirObjectPlays) {
 TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   // Hostile use: valid, stale and made-up handles, NaN and huge values, renders of any size,
   // banks released under live objects, paper sheets posted frames of any shape (crushed to a
-  // point, flung 1e8 m, NaN), all interleaved at random.
+  // point, flung 1e8 m, NaN), contacts between any objects posted any values, all interleaved
+  // at random.
   LiveRuntime r(8);
   const std::string paper_path = CHLADNI_SOURCE_DIR "/meshes/paper/crumple.json";
   const chladni::PaperAnimation paper = chladni::load_paper_animation(paper_path);
@@ -291,6 +292,8 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   std::vector<chladni_bank> banks;
   std::vector<chladni_object> objects;
   std::vector<chladni_shaker> shakers;
+  std::vector<chladni_contact> contacts;
+  int posted = 0;
   const double weird[] = {0.0, -1.0, 1e300, NAN, INFINITY, 0.01, 2.0};
   auto pick = [&](auto& v, auto junk) {
     return v.empty() || rng() % 5 == 0 ? junk : v[rng() % v.size()];
@@ -299,7 +302,7 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   for (int step = 0; step < 4000; ++step) {
     chladni_status s = CHLADNI_OK;
     const double t = chladni_runtime_time(r.rt) + (rng() % 3 ? 0.001 : any());
-    switch (rng() % 10) {
+    switch (rng() % 11) {
       case 0:
         banks.push_back(tone(r.rt, 200 + rng() % 4000));
         break;
@@ -366,6 +369,31 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
         }
         break;
       }
+      case 9: {  // contacts: added between any objects, posted any values, removed
+        const uint32_t what = rng() % 4;
+        if (what == 0) {
+          chladni_contact_desc d{};
+          d.object = pick(objects, chladni_object{rng()});
+          d.other = rng() % 3 ? chladni_object{0} : pick(objects, chladni_object{rng()});
+          d.surface = rng() % 4 ? "steel" : "velvet";
+          d.level = rng() % 4 ? 0.0 : any();
+          chladni_contact k{};
+          s = chladni_contact_add(r.rt, &d, &k);
+          if (s == CHLADNI_OK) contacts.push_back(k);
+        } else if (what == 1) {
+          s = chladni_contact_remove(r.rt, pick(contacts, chladni_contact{rng()}));
+        } else {
+          chladni_contact_state st{};
+          st.time = rng() % 4 ? t : any();
+          for (double& x : st.point) x = rng() % 4 ? 0.0 : any();
+          st.normal_force = rng() % 3 ? 1.0 : any();
+          st.slip_speed = rng() % 3 ? 0.3 : any();
+          st.rolling_speed = rng() % 3 ? 0.1 : any();
+          s = chladni_contact_post(r.rt, pick(contacts, chladni_contact{rng()}), &st);
+          posted += s == CHLADNI_OK;
+        }
+        break;
+      }
       default: {
         std::vector<float> out = r.render(uint32_t(rng() % 700));
         for (float x : out) ASSERT_TRUE(std::isfinite(x));
@@ -378,7 +406,9 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   for (chladni_object o : objects) chladni_object_remove(r.rt, o);
   for (chladni_bank b : banks) chladni_bank_release(r.rt, b);
   for (chladni_paper p : papers) chladni_paper_remove(r.rt, p);
-  // What the sheets buffered (up to 1.5 s) and their tails, then silence.
+  for (chladni_contact k : contacts) chladni_contact_remove(r.rt, k);
+  // What the sheets buffered (up to 1.5 s) and their tails, the contacts' ring-down (2.3 s for
+  // these tones), then silence.
   for (int k = 0; k < 4; ++k)
     for (float x : r.render(48000)) ASSERT_TRUE(std::isfinite(x));
   EXPECT_EQ(chladni::test::max_abs(r.render(256)), 0.0);
@@ -387,4 +417,7 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   EXPECT_EQ(r.rt->free_places.size(), 8u);
   EXPECT_EQ(r.rt->free_shaker_places.size(), r.rt->max_shakers());
   EXPECT_EQ(r.rt->free_paper_places.size(), r.rt->config.max_papers);
+  EXPECT_EQ(r.rt->free_contact_places.size(), r.rt->max_contacts());
+  EXPECT_GE(contacts.size(), 5u);  // the contacts were played, not only refused
+  EXPECT_GE(posted, 3);
 }

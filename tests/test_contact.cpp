@@ -202,7 +202,7 @@ TEST(ContactBank, AContactAtAModesNodeLeavesItStill) {
   ASSERT_TRUE(bank.push(c, contact_point(4800, 2, 0.5f, 0)));
   std::vector<float> rows(256), out(256);
   for (uint64_t t = 0; t < 4096; t += 256) {
-    bank.prepare(t, 256, rows.data());
+    bank.render(t, 256, rows.data());
     fb.process({}, 256, out.data(), {rows.data(), bank.streams()});
   }
   EXPECT_EQ(std::abs(fb.state(0)), 0.0f);  // mode 0 at its node
@@ -211,7 +211,7 @@ TEST(ContactBank, AContactAtAModesNodeLeavesItStill) {
   ASSERT_TRUE(bank.push(c, contact_point(4864, 2, 0.5f, 1)));
   ASSERT_TRUE(bank.push(c, contact_point(9600, 2, 0.5f, 1)));
   for (uint64_t t = 4096; t < 8192; t += 256) {
-    bank.prepare(t, 256, rows.data());
+    bank.render(t, 256, rows.data());
     fb.process({}, 256, out.data(), {rows.data(), bank.streams()});
   }
   EXPECT_GT(std::abs(fb.state(0)), 0.0f);
@@ -232,7 +232,7 @@ TEST(ContactBank, TwoBodiesFeelEqualAndOppositeForces) {
   ASSERT_TRUE(bank.push(c, contact_point(2400, 1, 0.3f, 1, 1)));
   std::vector<float> rows(256), out(256);
   for (uint64_t t = 0; t < 2048; t += 256) {
-    bank.prepare(t, 256, rows.data());
+    bank.render(t, 256, rows.data());
     fb.process({}, 256, out.data(), {rows.data(), bank.streams()});
   }
   for (uint32_t i = 0; i < 2; ++i) {
@@ -272,7 +272,7 @@ TEST(ContactBank, FadesInAndOutOverTheRampAndRefusesBadPoints) {
     }
     std::vector<float> rows(512), out(512);
     for (uint64_t t = 0; t < 1536; t += 512) {
-      bank.prepare(t, 512, rows.data());
+      bank.render(t, 512, rows.data());
       const std::span<const float> f = bank.force(c);
       force[run].insert(force[run].end(), f.begin(), f.begin() + 512);
       fb.process({}, 512, out.data(), {rows.data(), bank.streams()});
@@ -403,4 +403,43 @@ TEST(ContactScene, CpuAndGpuFilterbanksAgree) {
   ASSERT_EQ(a.samples.size(), b.samples.size());
   EXPECT_LT(test::max_diff(a.samples, b.samples), 1e-4 * peak);
   EXPECT_EQ(ctx->validation_errors(), 0u);
+}
+
+TEST(ContactBank, ARemovedContactRingsDownThenGivesItsSlotsBack) {
+  const ModalModel model = contact_two_points(1);
+  const ObjectModes modes = object_modes(model);
+  // Slots for one contact on the two-mode body: a second waits for the first to be freed.
+  CpuFilterbank fb({.capacity = 2, .channels = 1, .threads = 1, .max_frames = 256});
+  ContactBank bank(fb, {.sample_rate = kContactFs, .slots = 2, .max_contacts = 2});
+  ContactSpec spec;
+  spec.bodies[0] = &modes;
+  spec.roughness = roughness_preset("wood");
+  auto first = bank.prepare(spec), second = bank.prepare(spec);
+  ASSERT_TRUE(bank.install(*first, 0));
+  EXPECT_FALSE(bank.install(*second, 1));  // no slots left
+  ASSERT_TRUE(bank.push(0, contact_point(0, 1, 0.4f, 1)));
+  ASSERT_TRUE(bank.push(0, contact_point(2400, 1, 0.4f, 1)));
+  std::vector<float> rows(2 * 256), out(256);
+  uint64_t t = 0;
+  auto block = [&] {
+    bank.render(t, 256, rows.data());
+    fb.process({}, 256, out.data(), {rows.data(), bank.streams()});
+    t += 256;
+  };
+  while (t < 4096) block();
+  bank.remove(0, t);
+  EXPECT_FALSE(bank.push(0, contact_point(t + 10, 1, 0.4f, 1)));
+  // Mode 0 decays at 3/s: it rings for ln(1000)/3 = 2.3 s before the slots are let go.
+  const uint64_t removed = t;
+  while (bank.retired().empty() && t < removed + 4 * 48000) {
+    block();
+    if (t < removed + 2 * 48000) ASSERT_GT(std::abs(fb.state(0)), 0.0f) << t;
+  }
+  ASSERT_EQ(bank.retired().size(), 1u);
+  EXPECT_EQ(bank.retired()[0], 0u);
+  EXPECT_GT(t, removed + std::log(1e3) / 3 * 48000);
+  EXPECT_EQ(std::abs(fb.state(0)), 0.0f);
+  EXPECT_FALSE(bank.live(0));
+  bank.clear_retired();
+  EXPECT_TRUE(bank.install(*second, 1));  // the freed slots
 }

@@ -196,6 +196,8 @@ TEST(CApi, RenderingDoesNotAllocateWhileObjectsSpawnAndGo) {
   EXPECT_EQ(storm.unexpected, "");
   EXPECT_GE(storm.spawned.load(), 300);
   EXPECT_GE(storm.shakers_added.load(), 50);  // placed by the audio thread too
+  EXPECT_GE(storm.contacts_added.load(), 20);
+  EXPECT_GE(storm.contact_states.load(), 20);
   EXPECT_GT(peak, 0.0f);
   storm.clear();
   chladni_runtime_destroy(rt);
@@ -227,4 +229,61 @@ TEST(CApi, RenderingDoesNotAllocateWhilePaperSheetsPlay) {
   EXPECT_EQ(allocs, 0);
   EXPECT_GT(peak, 0.0f);
   EXPECT_TRUE(p.place_given_back());
+}
+
+TEST(CApi, RenderingDoesNotAllocateWhileContactsSlideAndRingDown) {
+  // A bar scraped and rolled on, its states posted every block (as a physics step would), then
+  // the contact removed: the audio thread pushes the states, makes the force, rings the modes
+  // down and gives the slots back, all without allocating.
+  chladni_config c;
+  chladni_config_default(&c);
+  c.threads = 1;
+  c.max_contacts = 1;  // so that adding another shows the first one's place came back
+  chladni_runtime* rt = nullptr;
+  ASSERT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();
+  chladni_bar bar;
+  chladni_bar_default(&bar);
+  chladni_bank bank{};
+  ASSERT_EQ(chladni_bank_from_bar(rt, &bar, &bank), CHLADNI_OK);
+  const double pos[3] = {0, 1, 0}, q[4] = {1, 0, 0, 0};
+  chladni_object rod{};
+  ASSERT_EQ(chladni_object_spawn(rt, bank, pos, q, 1.0, &rod), CHLADNI_OK);
+  chladni_contact_desc d{};
+  d.object = rod;
+  d.surface = "wood";
+  chladni_contact contact{};
+  ASSERT_EQ(chladni_contact_add(rt, &d, &contact), CHLADNI_OK) << chladni_last_error();
+  std::vector<float> out(2 * 256);
+  float peak = 0;
+  long allocs = 0;
+  for (int block = 0; block < 48000 * 9 / 256; ++block) {
+    const double now = block * 256 / 48000.0;
+    if (block < 200) {
+      chladni_contact_state s{};
+      s.time = now + 256 / 48000.0;
+      s.point[0] = 0.05 + 0.2 * block / 200.0;
+      s.point[1] = 0.015;
+      s.point[2] = 0.01;
+      s.normal_force = 2;
+      s.slip_speed = 0.3;
+      s.rolling_speed = 0.2;
+      ASSERT_EQ(chladni_contact_post(rt, contact, &s), CHLADNI_OK) << chladni_last_error();
+    }
+    if (block == 200) {
+      ASSERT_EQ(chladni_contact_remove(rt, contact), CHLADNI_OK);
+    }
+    g_allocs = 0;
+    t_count = true;
+    const chladni_status st = chladni_runtime_render(rt, out.data(), 256);
+    t_count = false;
+    allocs += g_allocs.load();
+    ASSERT_EQ(st, CHLADNI_OK);
+    for (float x : out) peak = std::max(peak, std::abs(x));
+  }
+  EXPECT_EQ(allocs, 0);
+  EXPECT_GT(peak, 0.0f);
+  // The place came back: the bar's slowest mode decays at about 1/s, 6.9 s to fall by 60 dB.
+  chladni_contact again{};
+  EXPECT_EQ(chladni_contact_add(rt, &d, &again), CHLADNI_OK) << chladni_last_error();
+  chladni_runtime_destroy(rt);
 }

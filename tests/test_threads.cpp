@@ -240,6 +240,8 @@ TEST(Threads, ObjectsSpawnAndGoWhileTheAudioThreadRenders) {
   EXPECT_GT(storm.moves.load(), 100);
   EXPECT_GE(storm.shakers_added.load(), 300);
   EXPECT_GE(storm.shakers_removed.load(), 20);
+  EXPECT_GE(storm.contacts_added.load(), 20);
+  EXPECT_GE(storm.contact_states.load(), 20);
   EXPECT_GT(storm.shaken.load(), 20);
   EXPECT_TRUE(finite);
   EXPECT_GT(peak, 0.0);

@@ -23,17 +23,19 @@
 
 namespace chladni::capi {
 
-enum class Kind : uint8_t { Impact, Move, Listener, Shake };
+enum class Kind : uint8_t { Impact, Move, Listener, Shake, Contact };
 
 // One posted command, plain data (copied through the queue).
 struct Command {
   Kind kind;
   uint64_t object;  // the object's handle id (a shaker's object for Shake)
-  uint64_t shaker;  // Shake: the shaker's handle id
+  uint64_t shaker;  // Shake: the shaker's handle id; Contact: the contact's
+  uint64_t other;   // Contact: the other object's handle id (0: none)
   double time;
-  double impulse, contact;  // impulse: a shake's energy
+  double impulse, contact;  // a shake's energy; a contact's normal force and slip speed
   int64_t vertex;
-  double a[3], b[3], c[3], q[4];  // direction/point/-, position/forward/up, orientation
+  // direction/point/-, position/forward/up, orientation; a contact's point/other point/rolling
+  double a[3], b[3], c[3], q[4];
 };
 
 // A paper sheet's audio on its way from the control thread, which renders each posted frame, to
@@ -52,13 +54,23 @@ struct PaperStream {
 
 // Control -> audio: an object or a shaker to place, or one to remove; a paper stream to mix.
 struct Change {
-  enum class Kind : uint8_t { Spawn, Remove, AddShaker, RemoveShaker, AddPaper } kind;
+  enum class Kind : uint8_t {
+    Spawn,
+    Remove,
+    AddShaker,
+    RemoveShaker,
+    AddPaper,
+    AddContact,
+    RemoveContact
+  } kind;
   uint32_t place;
   uint64_t id;
-  uint64_t object = 0;                                       // AddShaker: its object's handle id
+  uint64_t object = 0;  // AddShaker, AddContact: its object's handle id
+  uint64_t other = 0;   // AddContact: the other object's (0: none)
   runtime::ScenePlayer::PreparedObject* prepared = nullptr;  // Spawn
   runtime::ScenePlayer::PreparedShaker* shaker = nullptr;    // AddShaker
   PaperStream* paper = nullptr;                              // AddPaper
+  runtime::ContactBank::Prepared* contact = nullptr;         // AddContact
 };
 
 // Audio -> control: a place whose object or shaker has faded out, or storage to free.
@@ -69,11 +81,14 @@ struct Return {
     Refused,
     ShakerRetired,
     ShakerGarbage,
-    PaperRetired
+    PaperRetired,
+    ContactRetired,
+    ContactGarbage
   } kind;
   uint32_t place;
   runtime::ScenePlayer::PreparedObject* prepared = nullptr;  // Garbage, Refused
   runtime::ScenePlayer::PreparedShaker* shaker = nullptr;    // ShakerGarbage (also refused)
+  runtime::ContactBank::Prepared* contact = nullptr;         // ContactGarbage (also refused)
 };
 
 struct Bank {
@@ -101,6 +116,18 @@ struct Place {
 struct ShakerPlace {
   std::atomic<uint64_t> id{0};      // the live shaker's handle id (0: none)
   std::atomic<uint64_t> object{0};  // its object's handle id
+  uint32_t generation = 0;
+};
+
+// A contact place. `id`, `object`, `other` and `box` are read by the game thread, which may
+// read them for a handle the control thread is replacing (the audio thread then drops what it
+// posted); the rest is the control thread's.
+struct ContactPlace {
+  std::atomic<uint64_t> id{0};  // the live contact's handle id (0: none)
+  std::atomic<uint64_t> object{0}, other{0};
+  // Per body: the box a posted point must lie in (its surface points' box grown by a tenth of
+  // its diagonal; infinite without geometry): min x y z, max x y z.
+  std::atomic<double> box[2][6] = {};
   uint32_t generation = 0;
 };
 
@@ -163,9 +190,11 @@ struct chladni_runtime {
   void drain();
   void take_changes();
   void apply_due(uint64_t t, uint32_t frames);
+  void apply_contacts(uint64_t t);
   uint32_t until_next_pose(uint32_t frames) const;
   uint64_t sample_of(const chladni::capi::Command& c) const;
   uint32_t max_shakers() const { return config.shaker_slots ? config.max_shakers : 0; }
+  uint32_t max_contacts() const { return config.contact_slots ? config.max_contacts : 0; }
   void give_back(const chladni::capi::Return& r) {
     if (!returns.push(r)) ++lost_returns;  // sized so that it cannot fill
   }
@@ -183,18 +212,20 @@ struct chladni_runtime {
   // Control thread.
   std::unordered_map<uint64_t, std::unique_ptr<chladni::capi::Bank>> banks;
   uint64_t next_bank = 1;
-  std::vector<uint32_t> free_places, free_shaker_places, free_paper_places;
+  std::vector<uint32_t> free_places, free_shaker_places, free_paper_places, free_contact_places;
   std::vector<chladni::capi::PaperSheetPtr> papers;  // per paper place
   std::vector<uint32_t> paper_generations;
   // Shared.
   std::unique_ptr<chladni::capi::Place[]> places;
   std::unique_ptr<chladni::capi::ShakerPlace[]> shakers;
+  std::unique_ptr<chladni::capi::ContactPlace[]> contacts;
   chladni::runtime::SpscQueue<chladni::capi::Command> queue;
   chladni::runtime::SpscQueue<chladni::capi::Change> changes;
   chladni::runtime::SpscQueue<chladni::capi::Return> returns;
   // Audio thread.
-  std::vector<uint64_t> installed_ids;         // per place: the object installed there
-  std::vector<uint64_t> installed_shaker_ids;  // per shaker place: the shaker installed there
+  std::vector<uint64_t> installed_ids;          // per place: the object installed there
+  std::vector<uint64_t> installed_shaker_ids;   // per shaker place: the shaker installed there
+  std::vector<uint64_t> installed_contact_ids;  // per contact place: the contact there
   std::vector<chladni::capi::PaperStream*> installed_papers;  // per paper place
   std::vector<chladni::capi::Command> pending;  // drained commands, by time; capacity fixed
   uint64_t lost_returns = 0;                    // returns dropped on a full queue (a bug)
@@ -206,3 +237,32 @@ struct chladni_runtime {
   std::atomic<double> listener[9] = {};
   std::atomic<uint64_t> clock{0};  // `now`, published for chladni_runtime_time on other threads
 };
+
+namespace chladni::capi {
+
+// The place of the live handle `id` among `count` places (objects', shakers' or contacts'), for
+// the game thread; InputError naming the `noun` and how a handle stops being live otherwise.
+template <class P>
+uint32_t live_place(uint64_t id, const P* places, uint32_t count, const char* noun,
+                    const char* why) {
+  const uint32_t k = place_of(id);
+  if (id == 0 || k >= count || places[k].id.load(std::memory_order_acquire) != id)
+    throw InputError(std::string("no ") + noun + " " + std::to_string(id) + " (" + why + ")");
+  return k;
+}
+
+inline uint32_t live(const chladni_runtime* rt, chladni_object object) {
+  return live_place(object.id, rt->places.get(), rt->config.max_objects, "object",
+                    "never spawned, or removed");
+}
+
+inline uint32_t live_shaker(const chladni_runtime* rt, chladni_shaker shaker) {
+  return live_place(shaker.id, rt->shakers.get(), rt->max_shakers(), "shaker",
+                    "never added, or removed");
+}
+
+inline chladni_status post(chladni_runtime* rt, const Command& c) {
+  return rt->queue.push(c) ? CHLADNI_OK : fail(CHLADNI_QUEUE_FULL, "the command queue is full");
+}
+
+}  // namespace chladni::capi

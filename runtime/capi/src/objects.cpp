@@ -11,6 +11,9 @@ using namespace chladni;
 using namespace chladni::runtime;
 using chladni::capi::Command;
 using chladni::capi::Kind;
+using chladni::capi::live;
+using chladni::capi::live_shaker;
+using chladni::capi::post;
 
 namespace chladni::capi {
 
@@ -34,36 +37,6 @@ Quat unit_quaternion(const double* q) {
 }
 
 }  // namespace chladni::capi
-
-namespace {
-
-// The place of the live handle `id` among `count` places (objects' or shakers'), for the game
-// thread; InputError naming the `noun` and how a handle stops being live otherwise.
-template <class Place>
-uint32_t live_place(uint64_t id, const Place* places, uint32_t count, const char* noun,
-                    const char* why) {
-  const uint32_t k = capi::place_of(id);
-  if (id == 0 || k >= count || places[k].id.load(std::memory_order_acquire) != id)
-    throw InputError(std::string("no ") + noun + " " + std::to_string(id) + " (" + why + ")");
-  return k;
-}
-
-uint32_t live(const chladni_runtime* rt, chladni_object object) {
-  return live_place(object.id, rt->places.get(), rt->config.max_objects, "object",
-                    "never spawned, or removed");
-}
-
-uint32_t live_shaker(const chladni_runtime* rt, chladni_shaker shaker) {
-  return live_place(shaker.id, rt->shakers.get(), rt->max_shakers(), "shaker",
-                    "never added, or removed");
-}
-
-chladni_status post(chladni_runtime* rt, const Command& c) {
-  return rt->queue.push(c) ? CHLADNI_OK
-                           : capi::fail(CHLADNI_QUEUE_FULL, "the command queue is full");
-}
-
-}  // namespace
 
 // Takes back what the audio thread is done with: retired places (their bank loses an object,
 // and is freed if released and now unused) and the storage installs swapped out.
@@ -89,8 +62,15 @@ void chladni_runtime::reclaim() {
     if (ret.kind == Return::Kind::Retired || ret.kind == Return::Kind::Refused) vacate(ret.place);
     if (ret.kind == Return::Kind::ShakerRetired) vacate_shaker(ret.place);
     if (ret.kind == Return::Kind::PaperRetired) reclaim_paper(ret.place);
+    if (ret.kind == Return::Kind::ContactRetired) {
+      capi::ContactPlace& p = contacts[ret.place];
+      uint64_t expected = capi::handle_id(ret.place, p.generation);
+      p.id.compare_exchange_strong(expected, 0);  // never placed
+      free_contact_places.push_back(ret.place);
+    }
     delete ret.prepared;
     delete ret.shaker;
+    delete ret.contact;
   }
 }
 

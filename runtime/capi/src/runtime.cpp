@@ -42,15 +42,21 @@ std::unique_ptr<Filterbank> make_filterbank(const chladni_config& c) {
               : c.backend == CHLADNI_BACKEND_GPU ? gpu::DeviceChoice::Gpu
                                                  : gpu::DeviceChoice::Auto;
   r.gpu_falls_back = false;
-  r.capacity = c.mode_budget + c.shaker_slots;
+  r.capacity = c.mode_budget + c.shaker_slots + c.contact_slots;
   r.channels = c.channels;
   r.threads = c.threads;
   r.max_frames = c.block_size;
-  r.max_streams = c.shaker_slots ? c.max_shakers : 0;
+  r.max_streams = (c.shaker_slots ? c.max_shakers : 0) + (c.contact_slots ? c.max_contacts : 0);
   r.gain_ramp = c.gain_ramp;
   r.pipelined = c.gpu_pipeline != 0;
   if (c.vulkan && c.backend != CHLADNI_BACKEND_CPU) r.device = shared_device(*c.vulkan);
   return runtime::make_filterbank(r);
+}
+
+// Places whose additions and removals may be in flight between the control and audio threads.
+std::size_t places_in_flight(const chladni_config& c) {
+  return std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0) + c.max_papers +
+         (c.contact_slots ? c.max_contacts : 0);
 }
 
 void check_config(const chladni_config& c) {
@@ -73,6 +79,9 @@ void check_config(const chladni_config& c) {
     throw InputError("max_shakers must be in [1, 4096] when shaker_slots > 0");
   if (!(c.horizon > 0 && c.horizon <= 1e6)) throw InputError("horizon must be in (0, 1e6] s");
   if (c.max_papers > 256) throw InputError("max_papers must be at most 256");
+  if (c.contact_slots > (1u << 22)) throw InputError("contact_slots must be at most 2^22");
+  if (c.contact_slots && (c.max_contacts < 1 || c.max_contacts > 4096))
+    throw InputError("max_contacts must be in [1, 4096] when contact_slots > 0");
   if (c.backend != CHLADNI_BACKEND_CPU && c.backend != CHLADNI_BACKEND_GPU &&
       c.backend != CHLADNI_BACKEND_AUTO)
     throw InputError("backend must be CPU, GPU or AUTO");
@@ -95,13 +104,11 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
       name(fb->name()),
       places(std::make_unique<capi::Place[]>(c.max_objects)),
       shakers(std::make_unique<capi::ShakerPlace[]>(c.shaker_slots ? c.max_shakers : 0)),
+      contacts(std::make_unique<capi::ContactPlace[]>(c.contact_slots ? c.max_contacts : 0)),
       queue(c.queue_capacity),
       // Each place has at most an addition and a removal in flight, and as many returns.
-      changes(2 *
-              (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0) + c.max_papers)),
-      returns(
-          2 * (std::size_t{c.max_objects} + (c.shaker_slots ? c.max_shakers : 0) + c.max_papers) +
-          2) {
+      changes(2 * places_in_flight(c)),
+      returns(2 * places_in_flight(c) + 2) {
   PlayerOptions po;
   po.sample_rate = c.sample_rate;
   po.synth.sample_rate = c.sample_rate;
@@ -110,6 +117,8 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
   po.shaker_slots = c.shaker_slots;
   po.max_shakers = c.shaker_slots ? c.max_shakers : 0;
   po.max_objects = c.max_objects;
+  po.contact_slots = c.contact_slots;
+  po.max_contacts = max_contacts();
   player = std::make_unique<ScenePlayer>(*fb, po);
   player->finish_objects();  // the shared tables, empty: live objects carry their own
   pending.reserve(queue.capacity());
@@ -119,6 +128,9 @@ chladni_runtime::chladni_runtime(const chladni_config& c)
   for (uint32_t k = c.max_objects; k-- > 0;) free_places.push_back(k);
   free_shaker_places.reserve(max_shakers());
   for (uint32_t k = max_shakers(); k-- > 0;) free_shaker_places.push_back(k);
+  installed_contact_ids.assign(max_contacts(), 0);
+  free_contact_places.reserve(max_contacts());
+  for (uint32_t k = max_contacts(); k-- > 0;) free_contact_places.push_back(k);
   papers.resize(c.max_papers);
   paper_generations.assign(c.max_papers, 0);
   installed_papers.assign(c.max_papers, nullptr);
@@ -131,11 +143,13 @@ chladni_runtime::~chladni_runtime() {
   while (const capi::Change* c = changes.front()) {
     delete c->prepared;
     delete c->shaker;
+    delete c->contact;
     changes.pop();
   }
   while (const capi::Return* r = returns.front()) {
     delete r->prepared;
     delete r->shaker;
+    delete r->contact;
     returns.pop();
   }
   player.reset();  // before the banks its objects point into
@@ -178,6 +192,24 @@ void chladni_runtime::take_changes() {
       case Change::Kind::AddPaper:
         installed_papers[ch.place] = ch.paper;
         break;
+      case Change::Kind::AddContact: {
+        const bool bodies = installed(ch.object) && (ch.other == 0 || installed(ch.other));
+        const long other = ch.other ? long(capi::place_of(ch.other)) : -1;
+        if (bodies &&
+            player->install_contact(int(ch.place), capi::place_of(ch.object), other, *ch.contact)) {
+          installed_contact_ids[ch.place] = ch.id;
+          give_back({Return::Kind::ContactGarbage, ch.place, nullptr, nullptr, ch.contact});
+        } else {  // an object went first: the place is free again at once
+          give_back({Return::Kind::ContactRetired, ch.place, nullptr, nullptr, ch.contact});
+        }
+        break;
+      }
+      case Change::Kind::RemoveContact:
+        if (installed_contact_ids[ch.place] == ch.id) {
+          player->remove_contact(int(ch.place));
+          installed_contact_ids[ch.place] = 0;  // posts still queued for it are dropped
+        }
+        break;
     }
   }
 }
@@ -202,7 +234,7 @@ uint64_t chladni_runtime::sample_of(const Command& c) const {
 // so that moves take effect on their sample as in the offline renderer.
 uint32_t chladni_runtime::until_next_pose(uint32_t frames) const {
   for (const Command& c : pending) {
-    if (c.kind == Kind::Impact || c.kind == Kind::Shake) continue;
+    if (c.kind == Kind::Impact || c.kind == Kind::Shake || c.kind == Kind::Contact) continue;
     const uint64_t at = sample_of(c);
     if (at > now) return static_cast<uint32_t>(std::min<uint64_t>(frames, at - now));
   }
@@ -217,6 +249,7 @@ void chladni_runtime::apply_due(uint64_t t, uint32_t frames) {
       if (!applied(pending[i])) pending[kept++] = pending[i];
     pending.resize(kept);
   };
+  apply_contacts(t);
   keep_if([&](const Command& c) {
     if (c.kind == Kind::Impact || c.kind == Kind::Shake || sample_of(c) > t) return false;
     if (c.kind == Kind::Move) {
@@ -287,7 +320,9 @@ void chladni_config_default(chladni_config* c) {
                         1,
                         60.0,
                         nullptr,
-                        4};
+                        4,
+                        16384,
+                        64};
 }
 
 const char* chladni_last_error(void) {
@@ -336,6 +371,8 @@ chladni_status chladni_runtime_render(chladni_runtime* rt, float* out, uint32_t 
       rt->installed_shaker_ids[k] = 0;
       rt->give_back({capi::Return::Kind::ShakerRetired, k});
     }
+    for (uint32_t k : rt->player->retired_contacts())
+      rt->give_back({capi::Return::Kind::ContactRetired, k});
     rt->player->clear_retired();
     rt->mix_papers(first, start, all);
     rt->clock.store(rt->now, std::memory_order_release);

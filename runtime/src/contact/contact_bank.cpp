@@ -7,36 +7,6 @@
 #include "chladni/core/error.hpp"
 
 namespace chladni::runtime {
-namespace {
-
-bool valid(float x) {
-  return std::isfinite(x) && x >= 0;
-}
-
-// Drive per newton of force for one sample: the impulse f / fs kicks q_i by (v_i . n) / omega_d
-// per N*s; inline modes carry their pressure per N*s, a model without geometry 1 / omega_d.
-std::complex<float> drive(const ObjectModes& o, std::size_t i, std::size_t vertex, double fs) {
-  const double wd = o.modes[i].omega_d;
-  double per_ns = 0;
-  if (o.model && o.model->has_geometry()) {
-    const ModalModel& m = *o.model;
-    const Vec3 inward = m.normals.empty() ? Vec3{0, 0, -1} : scale(m.normals[vertex], -1.0);
-    per_ns = wd > 0 ? dot(m.shape(i, vertex), inward) / wd : 0.0;
-  } else if (o.inline_modes) {
-    per_ns = (*o.inline_modes)[i].amplitude;
-  } else if (wd > 0) {
-    per_ns = 1.0 / wd;
-  }
-  // The stream is the force's second derivative (contact_bank.hpp).
-  return {wd > 0 ? static_cast<float>(per_ns / (fs * wd * wd)) : 0.0f, 0.0f};
-}
-
-std::size_t points(const ObjectModes& o) {
-  return o.model && o.model->has_geometry() ? o.model->points.size() : 0;
-}
-
-}  // namespace
-
 ContactBank::ContactBank(Filterbank& fb, const ContactBankOptions& o) : fb_(fb), opt_(o) {
   if (!(std::isfinite(o.sample_rate) && o.sample_rate > 0))
     throw InputError("sample rate must be finite and > 0");
@@ -47,23 +17,26 @@ ContactBank::ContactBank(Filterbank& fb, const ContactBankOptions& o) : fb_(fb),
                      " input streams; contacts need " +
                      std::to_string(o.stream_base + o.max_contacts));
   lease_ = fb.lease(o.slots ? o.slots : fb.unleased());
-  contacts_.reserve(o.max_contacts);
+  contacts_.resize(o.max_contacts);
+  retired_.reserve(o.max_contacts);
+  // Each live contact splits at most one run in two.
+  free_runs_.reserve(std::size_t{o.max_contacts} + 2);
+  if (lease_.size() > 0) free_runs_.push_back({lease_.begin, lease_.size()});
   force_.assign(fb.max_frames(), 0.0f);
   slip_.assign(fb.max_frames(), 0.0f);
   roll_.assign(fb.max_frames(), 0.0f);
 }
 
 ContactBank::~ContactBank() {
-  for (uint32_t s = lease_.begin; s < lease_.begin + used_; ++s) fb_.clear_mode(s);
+  for (uint32_t s = lease_.begin; s < lease_.begin + slot_end_; ++s) fb_.clear_mode(s);
   fb_.set_used(lease_, 0);
   fb_.release(lease_);
 }
 
-int ContactBank::add_contact(const ContactSpec& spec) {
+std::unique_ptr<ContactBank::Prepared> ContactBank::prepare(const ContactSpec& spec) const {
   const std::string who = spec.name.empty() ? std::string("contact") : spec.name;
-  if (contacts_.size() >= opt_.max_contacts)
-    throw InputError(who + ": the bank holds " + std::to_string(opt_.max_contacts) + " contacts");
-  Contact c;
+  auto p = std::make_unique<Prepared>();
+  Contact& c = p->contact;
   c.name = who;
   try {
     c.profile = std::make_unique<SurfaceProfile>(spec.roughness, spec.seed);
@@ -75,148 +48,111 @@ int ContactBank::add_contact(const ContactSpec& spec) {
       c.profile->length() * double((spec.seed * 0x9e3779b97f4a7c15ull) >> 11) * 0x1.0p-53;
   c.excitation = std::make_unique<ContactExcitation>(*c.profile, opt_.sample_rate, start);
   c.body_count = spec.bodies[1] ? 2 : 1;
-  const uint32_t stream = opt_.stream_base + uint32_t(contacts_.size());
-  uint32_t need = 0;
+  double slowest = 1e9;
   for (int b = 0; b < c.body_count; ++b) {
     const ObjectModes* o = spec.bodies[b];
     if (!o || o->modes.empty()) throw InputError(who + ": a body in contact has no modes");
-    need += uint32_t(o->modes.size());
+    c.bodies[b].modes = *o;
+    c.bodies[b].count = uint32_t(o->modes.size());
+    c.slots += c.bodies[b].count;
+    for (const ModeSpec& m : o->modes) slowest = std::min(slowest, std::max(m.decay, 1e-3));
   }
-  if (need > lease_.size() - used_)
-    throw InputError(who + ": needs " + std::to_string(need) + " filterbank slots, " +
-                     std::to_string(lease_.size() - used_) + " are free");
-  for (int b = 0; b < c.body_count; ++b) {
-    Body& body = c.bodies[b];
-    body.modes = *spec.bodies[b];
-    body.first_slot = lease_.begin + used_;
-    body.count = uint32_t(body.modes.modes.size());
-    const float silent[2] = {0, 0};
-    for (uint32_t i = 0; i < body.count; ++i) {
-      const ModeSpec& m = body.modes.modes[i];
-      fb_.set_mode(body.first_slot + i, pole(m.omega_d, m.decay, opt_.sample_rate), silent);
-      fb_.set_input(body.first_slot + i, stream, {0, 0});
-    }
-    used_ += body.count;
-  }
+  if (c.slots > lease_.size())
+    throw InputError(who + ": needs " + std::to_string(c.slots) +
+                     " filterbank slots, the bank has " + std::to_string(lease_.size()));
+  c.ring_down = uint64_t(std::ceil(std::log(1e3) / slowest * opt_.sample_rate));
   c.ring.resize(opt_.max_points);
   c.force.assign(fb_.max_frames(), 0.0f);
-  contacts_.push_back(std::move(c));
-  fb_.set_used(lease_, used_);
-  return int(contacts_.size() - 1);
+  return p;
 }
 
-bool ContactBank::push(int k, const ContactPoint& p) {
-  if (k < 0 || std::size_t(k) >= contacts_.size()) return false;
-  Contact& c = contacts_[k];
-  if (c.size == c.ring.size() || c.end != UINT64_MAX) return false;
-  if (c.size > 0 && p.sample < at(c, c.size - 1).sample) return false;
-  if (!valid(p.force) || !valid(p.slip) || !valid(p.rolling)) return false;
+bool ContactBank::install(Prepared& p, uint32_t index) noexcept {
+  if (index >= contacts_.size() || contacts_[index].live || p.contact.slots == 0) return false;
+  const uint32_t first = take_slots(p.contact.slots);
+  if (first == UINT32_MAX) return false;
+  std::swap(contacts_[index], p.contact);
+  Contact& c = contacts_[index];
+  c.live = true;
+  c.first_slot = first;
+  const uint32_t stream = opt_.stream_base + index;
+  const float silent[2] = {0, 0};
+  uint32_t slot = first;
   for (int b = 0; b < c.body_count; ++b) {
-    const std::size_t n = points(c.bodies[b].modes);
-    if (n > 0 && p.vertex[b] >= n) return false;
+    Body& body = c.bodies[b];
+    body.first_slot = slot;
+    body.vertex = -1;
+    for (uint32_t i = 0; i < body.count; ++i, ++slot) {
+      const ModeSpec& m = body.modes.modes[i];
+      fb_.set_mode(slot, pole(m.omega_d, m.decay, opt_.sample_rate), silent);
+      fb_.set_input(slot, stream, {0, 0});
+    }
   }
-  if (!c.started && c.size == 0) c.begin = p.sample;
-  c.ring[(c.head + c.size) % c.ring.size()] = p;
-  ++c.size;
+  count_ = std::max(count_, index + 1);
+  slot_end_ = std::max(slot_end_, first + c.slots - lease_.begin);
+  fb_.set_used(lease_, slot_end_);
   return true;
 }
 
-void ContactBank::end(int k, uint64_t sample) {
-  if (k < 0 || std::size_t(k) >= contacts_.size()) return;
+int ContactBank::add_contact(const ContactSpec& spec) {
+  std::unique_ptr<Prepared> p = prepare(spec);
+  if (!install(*p, count_))
+    throw InputError(p->contact.name + ": the bank has no room (" +
+                     std::to_string(opt_.max_contacts) + " contacts, " +
+                     std::to_string(lease_.size()) + " slots)");
+  return int(count_ - 1);
+}
+
+void ContactBank::remove(int k, uint64_t sample) {
+  if (!live(k)) return;
   Contact& c = contacts_[k];
-  c.end = std::min(c.end, sample);
+  end(k, sample);
+  c.retire_at = std::min(c.retire_at, c.end + opt_.ramp + 2 + c.ring_down);
 }
 
-void ContactBank::set_gains(int k, int body, std::span<const float> gains, float left,
-                            float right) {
-  if (k < 0 || std::size_t(k) >= contacts_.size()) return;
-  Contact& c = contacts_[k];
-  if (body < 0 || body >= c.body_count) return;
-  const Body& b = c.bodies[body];
-  const uint32_t n = std::min<uint32_t>(b.count, uint32_t(gains.size()));
-  for (uint32_t i = 0; i < n; ++i) {
-    const float g[2] = {gains[i] * left, gains[i] * right};
-    fb_.set_gains(b.first_slot + i, g);
+// Its modes rung down: the gains ramp to zero, then the slots are cleared and given back. True
+// when the contact is gone.
+bool ContactBank::retire(Contact& c, uint32_t index, uint64_t now) {
+  if (c.retire_at == UINT64_MAX || now < c.retire_at) return false;
+  if (!c.fading) {
+    const float zero[2] = {0, 0};
+    for (uint32_t s = c.first_slot; s < c.first_slot + c.slots; ++s) fb_.set_gains(s, zero);
+    c.fading = true;
+    c.free_at = now + fb_.gain_ramp();
+    return false;
   }
+  if (now < c.free_at) return false;
+  for (uint32_t s = c.first_slot; s < c.first_slot + c.slots; ++s) fb_.clear_mode(s);
+  give_slots(c.first_slot, c.slots);
+  c.live = c.fading = false;
+  c.retire_at = UINT64_MAX;
+  if (retired_.size() < retired_.capacity()) retired_.push_back(index);
+  return true;
 }
 
-uint64_t ContactBank::silent_from() const {
-  uint64_t last = 0;
-  for (const Contact& c : contacts_) {
-    if (c.end == UINT64_MAX) return UINT64_MAX;
-    last = std::max(last, c.end + opt_.ramp);
+uint32_t ContactBank::take_slots(uint32_t count) noexcept {
+  for (std::size_t r = 0; r < free_runs_.size(); ++r) {
+    auto& [first, n] = free_runs_[r];
+    if (n < count) continue;
+    const uint32_t at = first;
+    first += count;
+    n -= count;
+    if (n == 0) free_runs_.erase(free_runs_.begin() + std::ptrdiff_t(r));
+    return at;
   }
-  return last;
+  return UINT32_MAX;
 }
 
-void ContactBank::drive_gains(Contact& c, uint32_t stream, const ContactPoint& p) {
-  for (int b = 0; b < c.body_count; ++b) {
-    Body& body = c.bodies[b];
-    const int64_t v = points(body.modes) > 0 ? int64_t(p.vertex[b]) : 0;
-    if (v == body.vertex) continue;
-    body.vertex = v;
-    for (uint32_t i = 0; i < body.count; ++i)
-      fb_.set_input(body.first_slot + i, stream,
-                    drive(body.modes, i, std::size_t(v), opt_.sample_rate));
+void ContactBank::give_slots(uint32_t first, uint32_t count) noexcept {
+  if (count == 0) return;
+  auto it = std::lower_bound(free_runs_.begin(), free_runs_.end(), std::make_pair(first, 0u));
+  it = free_runs_.insert(it, {first, count});  // within the reserved capacity
+  if (it + 1 != free_runs_.end() && it->first + it->second == (it + 1)->first) {
+    it->second += (it + 1)->second;
+    free_runs_.erase(it + 1);
   }
-}
-
-// The per-sample normal force (faded), slip and rolling speed of [now, now + frames).
-void ContactBank::fill(Contact& c, uint64_t now, uint32_t frames) {
-  const double ramp = std::max<uint32_t>(opt_.ramp, 1);
-  std::size_t seg = 0;  // points seg and seg + 1 bracket the sample, where both exist
-  for (uint32_t n = 0; n < frames; ++n) {
-    const uint64_t t = now + n;
-    while (seg + 1 < c.size && at(c, seg + 1).sample <= t) ++seg;
-    const ContactPoint& a = at(c, seg);
-    float N = a.force, vs = a.slip, vr = a.rolling;
-    if (seg + 1 < c.size && t > a.sample) {
-      const ContactPoint& b = at(c, seg + 1);
-      const float w = float(double(t - a.sample) / double(b.sample - a.sample));
-      N += w * (b.force - a.force);
-      vs += w * (b.slip - a.slip);
-      vr += w * (b.rolling - a.rolling);
-    }
-    double env = 0;
-    if (t >= c.begin) env = std::min(1.0, double(t - c.begin) / ramp);
-    if (c.end != UINT64_MAX) env *= std::clamp(1.0 - (double(t) - double(c.end)) / ramp, 0.0, 1.0);
-    force_[n] = float(N * env);
-    slip_[n] = vs;
-    roll_[n] = vr;
-  }
-}
-
-void ContactBank::prepare(uint64_t now, uint32_t frames, float* rows) {
-  for (std::size_t k = 0; k < contacts_.size(); ++k) {
-    Contact& c = contacts_[k];
-    const uint32_t stream = opt_.stream_base + uint32_t(k);
-    float* row = rows + std::size_t(stream) * frames;
-    // Points wholly behind this block: keep the last one at or before its start.
-    while (c.size >= 2 && at(c, 1).sample <= now) {
-      c.head = (c.head + 1) % c.ring.size();
-      --c.size;
-    }
-    const bool silent = c.size == 0 || now + frames <= c.begin ||
-                        (c.end != UINT64_MAX && now >= c.end + opt_.ramp + 2);
-    if (silent) {
-      std::memset(row, 0, sizeof(float) * frames);
-      std::fill(c.force.begin(), c.force.begin() + frames, 0.0f);
-      c.f1 = c.f2 = 0;
-      continue;
-    }
-    c.started = true;
-    drive_gains(c, stream, at(c, 0));
-    fill(c, now, frames);
-    c.excitation->process(force_.data(), slip_.data(), roll_.data(), frames, c.force.data());
-    // f'' by second differences, one sample late (the slots' drive gains hold the 1 / omega_d^2);
-    // the lag is the same for every mode.
-    const double fs2 = opt_.sample_rate * opt_.sample_rate;
-    for (uint32_t n = 0; n < frames; ++n) {
-      const float f = c.force[n];
-      row[n] = static_cast<float>((double(f) - 2.0 * c.f1 + c.f2) * fs2);
-      c.f2 = c.f1;
-      c.f1 = f;
-    }
+  if (it != free_runs_.begin() && (it - 1)->first + (it - 1)->second == it->first) {
+    (it - 1)->second += it->second;
+    free_runs_.erase(it);
   }
 }
 

@@ -51,8 +51,10 @@ ScenePlayer::ScenePlayer(Filterbank& fb, const PlayerOptions& o)
       bank_(make_bank(fb, o)),
       contacts_(make_contacts(fb, o)),
       synth_(fb, o.synth) {
-  if (contacts_)
+  if (contacts_) {
+    contact_objects_.assign(o.max_contacts, {-1, -1});
     drive_.assign(std::size_t{contacts_->streams() + o.max_contacts} * fb.max_frames(), 0.0f);
+  }
   if (!std::isfinite(o.gain)) throw InputError("scene gain must be finite");
   shakers_.reserve(o.max_shakers);
   retired_shakers_.reserve(o.max_shakers);
@@ -268,6 +270,7 @@ void ScenePlayer::move(std::size_t k, const Vec3& position, const Quat& orientat
 void ScenePlayer::remove(std::size_t k) {
   Object& o = objects_.at(k);
   if (o.voice < 0) return;
+  if (contacts_) end_contacts_of(k);
   // Fade out over the gain ramp, then free the slots (render()); at once without a ramp.
   std::fill(o.gains.begin(), o.gains.end(), 0.0f);
   synth_.set_mode_gains(o.voice, o.gains);

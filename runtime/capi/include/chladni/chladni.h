@@ -5,13 +5,14 @@
  *
  * Threads. Three roles, each on one thread at a time (control and game may be the same thread):
  *  - control: chladni_runtime_create/destroy, the chladni_bank_* calls, chladni_object_spawn,
- *    chladni_object_remove, chladni_shaker_add, chladni_shaker_remove and the chladni_paper_*
- *    calls. These allocate and (but create/destroy) may run while the audio thread renders: a new
- *    object or shaker is made here and handed to the audio thread through a queue, placed at the
- *    next block boundary; a removed one fades out there and is freed here afterwards.
- *  - game: chladni_impact_post, chladni_object_move, chladni_listener_set and
- *    chladni_shaker_shake. Lock-free and allocation-free; they reach the audio thread through a
- *    single-producer single-consumer queue.
+ *    chladni_object_remove, chladni_shaker_add, chladni_shaker_remove, chladni_contact_add,
+ *    chladni_contact_remove and the chladni_paper_* calls. These allocate and (but create/destroy)
+ * may run while the audio thread renders: a new object or shaker is made here and handed to the
+ * audio thread through a queue, placed at the next block boundary; a removed one fades out there
+ * and is freed here afterwards.
+ *  - game: chladni_impact_post, chladni_object_move, chladni_listener_set,
+ *    chladni_shaker_shake and chladni_contact_post. Lock-free and allocation-free; they reach
+ *    the audio thread through a single-producer single-consumer queue.
  *  - audio: chladni_runtime_render. It never allocates, locks or waits (beyond the filterbank's
  *    own work, and, on a Vulkan queue shared with the application, its lock_queue once a block).
  *  chladni_runtime_time, chladni_runtime_latency and chladni_last_error may be called anywhere.
@@ -93,6 +94,9 @@ typedef struct chladni_config {
   const chladni_vulkan_device* vulkan; /* NULL: the GPU backend opens a device of its own; else
                                           GPU and AUTO run on this one (copied at creation) */
   uint32_t max_papers;                 /* 4: paper sheets alive or ringing out at once (0: none) */
+  uint32_t contact_slots;              /* 16384: modes of all continuous contacts together (each
+                                          contact takes its bodies' modes; 0: no contacts) */
+  uint32_t max_contacts;               /* 64: contacts alive or ringing down at once */
 } chladni_config;
 
 typedef struct chladni_runtime chladni_runtime;
@@ -108,6 +112,9 @@ typedef struct chladni_shaker {
 typedef struct chladni_paper {
   uint64_t id;
 } chladni_paper;
+typedef struct chladni_contact {
+  uint64_t id;
+} chladni_contact;
 
 /* Fills `config` with the defaults above. */
 void chladni_config_default(chladni_config* config);
@@ -210,6 +217,45 @@ chladni_status chladni_shaker_remove(chladni_runtime* runtime, chladni_shaker sh
 chladni_status chladni_shaker_shake(chladni_runtime* runtime, chladni_shaker shaker, double time,
                                     double energy);
 
+/* A continuous contact (docs/contact.md): something sliding or rolling on an object, or two
+ * objects rubbing, whose normal force, speeds and points the game posts once per physics step.
+ * The object's modes (and the other's, pressed the other way) ring from a surface profile read
+ * at the slip speed or seen through a rolling patch. */
+typedef struct chladni_contact_desc {
+  chladni_object object; /* the body whose modes it drives (a bank with surface points, or
+                            inline modes) */
+  chladni_object other;  /* id 0: none; else a second body, driven with the opposite force */
+  const char* surface;   /* a surface preset: "steel", "aluminium", "glass", "ceramic", "wood",
+                            "stone", "plastic"; NULL: "steel" */
+  double level;          /* sliding force fluctuation per newton of normal force; 0: the
+                            surface's own */
+  uint64_t seed;         /* 0: 1 */
+} chladni_contact_desc;
+typedef struct chladni_contact_state {
+  double time;           /* s on the runtime's clock at which these values hold */
+  double point[3];       /* on the object, its frame: the nearest surface point is driven */
+  double other_point[3]; /* on the other, its frame (ignored without one) */
+  double normal_force;   /* N, [0, 1e6] */
+  double slip_speed;     /* m/s, [0, 100] */
+  double rolling_speed;  /* m/s, [0, 100] */
+} chladni_contact_state;
+/* Adds a contact, silent until its first state, from the next block. CHLADNI_QUEUE_FULL when
+ * max_contacts contacts are alive or ringing down. Control call: the surface's tables are made
+ * here (about 2 MB). */
+chladni_status chladni_contact_add(chladni_runtime* runtime, const chladni_contact_desc* desc,
+                                   chladni_contact* contact);
+/* The contact's state at `state->time`, typically once per physics step: between two posts the
+ * runtime interpolates every value per sample, so post each step's state at the time the step
+ * ends (a step behind the game's clock is smooth; a state posted for a time already rendered
+ * holds from now). The force fades in over gain_ramp samples from the first post. A point
+ * farther from the object's box than a tenth of its size, a non-finite value, or one out of
+ * range is refused (CHLADNI_INPUT_ERROR); so is a state earlier than the last one posted. Game
+ * thread. */
+chladni_status chladni_contact_post(chladni_runtime* runtime, chladni_contact contact,
+                                    const chladni_contact_state* state);
+/* Ends a contact: its force fades out over gain_ramp samples, its modes ring down as after an
+ * impact, and it is freed after. Ending an object ends its contacts. Control call. */
+chladni_status chladni_contact_remove(chladni_runtime* runtime, chladni_contact contact);
 /* Paper sound (Schreck et al. 2016; docs/paper.md): a sheet whose vertex positions the game posts
  * once per animation frame. Each frame is analysed for friction and crumpling as `chladni paper`
  * does, on the calling (control) thread, and its audio is handed to the audio thread, which mixes

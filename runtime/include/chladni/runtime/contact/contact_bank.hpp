@@ -18,8 +18,13 @@
 // point and out over `ramp` samples from end(), so nothing steps. A body's surface point changes
 // its drive gains at the first block that starts past the point naming it.
 //
-// Threading: the constructor and add_contact() allocate (a control thread); push(), end(),
-// set_gains() and prepare() neither allocate nor lock.
+// Contacts come and go while the bank plays: prepare() builds one off the audio thread,
+// install() places it at an index on a run of free slots without allocating, and remove() fades
+// it out; once its modes have rung down by 60 dB their gains ramp to zero, the slots and the
+// index are freed, and retired() reports the index.
+//
+// Threading: the constructor, prepare() and add_contact() allocate (a control thread); install(),
+// push(), end(), remove(), set_gains() and render() neither allocate nor lock.
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -67,9 +72,27 @@ class ContactBank {
   ContactBank(const ContactBank&) = delete;
   ContactBank& operator=(const ContactBank&) = delete;
 
-  /// Adds a contact, silent until its first point; returns its index. Throws InputError naming
-  /// the contact when its roughness is out of range, a body has no modes, or the bank is full.
+  /// A contact built off the audio thread (its profile tables, queues and the bodies' modes).
+  struct Prepared;
+  /// Throws InputError naming the contact when its roughness is out of range, a body has no
+  /// modes, or its modes exceed the bank's slots.
+  std::unique_ptr<Prepared> prepare(const ContactSpec& spec) const;
+  /// Places `prepared` at `index` (< max_contacts, not in use) on a run of free slots, silent
+  /// until its first point, without allocating; `prepared` then holds what the index held
+  /// before, for the caller to free off the audio thread. False when the index is taken or out
+  /// of range, or no run of slots is long enough.
+  bool install(Prepared& prepared, uint32_t index) noexcept;
+  /// prepare() and install() at the first index never used; returns it. Throws InputError.
   int add_contact(const ContactSpec& spec);
+  /// Ends the contact at `sample` (its force fades out from there) and frees it once its modes
+  /// have rung down (retired()).
+  void remove(int contact, uint64_t sample);
+  /// Indices freed since clear_retired() (up to max_contacts).
+  std::span<const uint32_t> retired() const { return retired_; }
+  void clear_retired() { retired_.clear(); }
+  bool live(int contact) const {
+    return contact >= 0 && std::size_t(contact) < contacts_.size() && contacts_[contact].live;
+  }
   /// Queues a control point. False (and dropped) when the queue is full, the point is earlier
   /// than the last one queued, the contact has ended, or a value is not finite or negative, or a
   /// vertex lies past its body's surface points.
@@ -79,14 +102,16 @@ class ContactBank {
   /// A body's per-mode listener gains and pan (they ramp as the filterbank ramps gains).
   void set_gains(int contact, int body, std::span<const float> gains, float left, float right);
 
-  /// Writes each contact's force for samples [now, now + frames) into row stream_base + k of
-  /// `rows` (stream-major, `frames` per row), and updates drive gains whose point changed.
-  void prepare(uint64_t now, uint32_t frames, float* rows);
+  /// Writes each contact's input for samples [now, now + frames) into row stream_base + k of
+  /// `rows` (stream-major, `frames` per row), updates drive gains whose point changed, and frees
+  /// the contacts removed that have rung down.
+  void render(uint64_t now, uint32_t frames, float* rows);
   /// A contact's normal-direction force (N, faded) over the last prepare()'s samples.
   std::span<const float> force(int contact) const { return contacts_.at(contact).force; }
   /// Input streams the filterbank must be given: stream_base + contacts.
-  uint32_t streams() const { return opt_.stream_base + uint32_t(contacts_.size()); }
-  uint32_t contact_count() const { return uint32_t(contacts_.size()); }
+  uint32_t streams() const { return opt_.stream_base + count_; }
+  /// Indices used so far (live or not): contacts [0, contact_count()) have streams.
+  uint32_t contact_count() const { return count_; }
   /// The sample after which no contact's force is non-zero (0 before any end; UINT64_MAX while
   /// one has not ended).
   uint64_t silent_from() const;
@@ -98,6 +123,11 @@ class ContactBank {
     int64_t vertex = -1;  // the point the drive gains were last set for
   };
   struct Contact {
+    bool live = false;
+    bool fading = false;  // removed, rung down: its gains ramping to zero
+    uint64_t retire_at = UINT64_MAX, free_at = 0;
+    uint64_t ring_down = 0;  // samples its slowest mode takes to fall by 60 dB
+    uint32_t first_slot = 0, slots = 0;
     std::string name;
     std::array<Body, 2> bodies;
     int body_count = 1;
@@ -115,13 +145,24 @@ class ContactBank {
   }
   void drive_gains(Contact& c, uint32_t stream, const ContactPoint& p);
   void fill(Contact& c, uint64_t now, uint32_t frames);
+  bool retire(Contact& c, uint32_t index, uint64_t now);
+  uint32_t take_slots(uint32_t count) noexcept;
+  void give_slots(uint32_t first, uint32_t count) noexcept;
 
   Filterbank& fb_;
   ContactBankOptions opt_;
   SlotLease lease_;
-  uint32_t used_ = 0;
-  std::vector<Contact> contacts_;
+  uint32_t slot_end_ = 0;  // slots [lease_.begin, +slot_end_) have been used
+  uint32_t count_ = 0;
+  // Runs of free slots (first, count), sorted and merged; capacity fixed.
+  std::vector<std::pair<uint32_t, uint32_t>> free_runs_;
+  std::vector<Contact> contacts_;  // max_contacts places
+  std::vector<uint32_t> retired_;
   std::vector<float> force_, slip_, roll_;  // scratch, max_frames each
+};
+
+struct ContactBank::Prepared {
+  Contact contact;
 };
 
 }  // namespace chladni::runtime

@@ -90,6 +90,7 @@ class ScenePlayer {
   void clear_retired() {
     retired_.clear();
     retired_shakers_.clear();
+    if (contacts_) contacts_->clear_retired();
   }
 
   /// Adds a shaker at `object`: a voice whose resonances are the object's modes (`resonate`:
@@ -123,6 +124,23 @@ class ScenePlayer {
   /// roughness is out of range or an object is not live. Control thread.
   int add_contact(std::size_t object, long other, const Roughness& roughness, uint64_t seed,
                   const std::string& name);
+  /// A contact built off the audio thread between `body` and, unless null, `other` (their
+  /// modes), for install_contact(). Throws InputError naming `name`.
+  std::unique_ptr<ContactBank::Prepared> prepare_contact(const ObjectModes& body,
+                                                         const ObjectModes* other,
+                                                         const Roughness& roughness, uint64_t seed,
+                                                         const std::string& name) const;
+  /// Places a prepared contact at `index` on live objects, without allocating; `prepared` then
+  /// holds what the index held before. False when the index is taken or out of range, an object
+  /// is not live, or the contacts' slots are full.
+  bool install_contact(int index, std::size_t object, long other,
+                       ContactBank::Prepared& prepared) noexcept;
+  /// Ends a contact now; its index is reported by retired_contacts() once its modes have rung
+  /// down. An object's removal ends (but does not remove) the contacts that touch it.
+  void remove_contact(int contact);
+  std::span<const uint32_t> retired_contacts() const {
+    return contacts_ ? contacts_->retired() : std::span<const uint32_t>{};
+  }
   /// Queues a control point of a contact (contact_bank.hpp); false when refused.
   bool push_contact(int contact, const ContactPoint& point);
   /// The contact's force fades out from absolute sample `sample`.
@@ -199,6 +217,7 @@ class ScenePlayer {
   void end_shaker_fades();
   void apply_shaker_gains(int shaker);
   void apply_contact_gains();
+  void end_contacts_of(std::size_t object);
   DriveInput drive(uint32_t frames);
 
   Filterbank& fb_;
