@@ -51,13 +51,19 @@ for bin in "$tmp/embed/minimal_c" "$tmp/embed/minimal_cpp" "$tmp/minimal_pc" "$t
   fi
 done
 "$tmp/minimal_pc"
-# The example host (Bullet): its first sound starts with its first impact, within 1 ms.
+# The example host (Bullet): its first sound starts with its first impact, within 1 ms; its
+# bodies slide and roll through continuous contacts.
 cmake -S "$src/examples/falling-objects" -B "$tmp/falling" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DCMAKE_PREFIX_PATH="$tmp/prefix" > "$tmp/falling-configure.log"
 cmake --build "$tmp/falling" > "$tmp/falling-build.log"
-(cd "$tmp" && "$tmp/falling/falling_objects" --seconds 2 -o f.wav --log f.csv) | tee "$tmp/f.out"
+# --check: every logged sliding or rolling interval has its contact's own sound, and each contact
+# that ends stops driving its body within 50 ms (the program exits 1 otherwise).
+(cd "$tmp" && "$tmp/falling/falling_objects" --seconds 2 --check -o f.wav --log f.csv) |
+  tee "$tmp/f.out"
 test "$(grep -c ',impact,' "$tmp/f.csv")" -gt 4
-test "$(grep -c ',scrape,' "$tmp/f.csv")" -gt 0  # sliding bodies scrape
+test "$(grep -c ',slide,' "$tmp/f.csv")" -gt 0  # bodies slide ...
+test "$(grep -c ',roll,' "$tmp/f.csv")" -gt 0   # ... and the ball rolls
+grep -q ' 0 without sound; [1-9][0-9]* ends, 0 driven on past 50 ms' "$tmp/f.out"
 awk '/first impact at/ { i = $(NF-9); s = $(NF-4); d = s - i; if (i < 0 || d < 0 || d > 0.001) exit 1 }' \
   "$tmp/f.out"
 # The windowed renderer example builds against the package as shown in its CMakeLists.txt (the
