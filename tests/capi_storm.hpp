@@ -22,6 +22,7 @@ inline chladni_runtime* storm_runtime() {
   chladni_config_default(&c);
   c.threads = 1;
   c.max_objects = 64;
+  c.contact_slots = 4096;
   chladni_runtime* rt = nullptr;
   return chladni_runtime_create(&c, &rt) == CHLADNI_OK ? rt : nullptr;
 }

@@ -102,7 +102,7 @@ TEST(CApiContact, PostedStatesSoundAsTheSceneRendersThem) {
   const double peak = test::max_abs(offline.samples);
   ASSERT_GT(peak, 0);
 
-  test::CApiRuntime r;
+  test::CApiRuntime r([](chladni_config& c) { c.contact_slots = 4096; });
   BarContact b(r.rt);
   std::vector<float> live;
   auto render = [&](uint32_t frames) {
@@ -127,7 +127,10 @@ TEST(CApiContact, PostedStatesSoundAsTheSceneRendersThem) {
 }
 
 TEST(CApiContact, RefusesWhatCannotPlayNamingTheCall) {
-  test::CApiRuntime r([](chladni_config& c) { c.max_contacts = 1; });
+  test::CApiRuntime r([](chladni_config& c) {
+    c.contact_slots = 4096;
+    c.max_contacts = 1;
+  });
   BarContact b(r.rt);
   r.render(256);
   auto refused = [&](chladni_contact_state s, const std::string& what) {
@@ -183,7 +186,7 @@ TEST(CApiContact, RefusesWhatCannotPlayNamingTheCall) {
   s = capi_contact_state(0);
   EXPECT_EQ(chladni_contact_post(r.rt, more, &s), CHLADNI_INPUT_ERROR);
   // Without contact slots there are no contacts.
-  test::CApiRuntime none([](chladni_config& c) { c.contact_slots = 0; });
+  test::CApiRuntime none;  // contact_slots = 0 by default
   chladni_bar bar;
   chladni_bar_default(&bar);
   chladni_bank nbank{};

@@ -284,7 +284,10 @@ TEST(CApiLive, RandomCallSequencesNeverCrashAndGiveEverythingBack) {
   // banks released under live objects, paper sheets posted frames of any shape (crushed to a
   // point, flung 1e8 m, NaN), contacts between any objects posted any values, all interleaved
   // at random.
-  LiveRuntime r(8);
+  chladni::test::CApiRuntime r([](chladni_config& c) {
+    c.max_objects = 8;
+    c.contact_slots = 4096;
+  });
   const std::string paper_path = CHLADNI_SOURCE_DIR "/meshes/paper/crumple.json";
   const chladni::PaperAnimation paper = chladni::load_paper_animation(paper_path);
   std::vector<chladni_paper> papers;

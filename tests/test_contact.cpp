@@ -162,6 +162,40 @@ TEST(ContinuousContact, RollingSpectrumFollowsSpeedAndThePatch) {
   }
 }
 
+TEST(ContinuousContact, RibbedSurfaceSoundsAtTheSpeedOverTheSpacing) {
+  Roughness r = contact_surface();
+  r.ribs = 0.005;
+  // Deep ribs: the fractal shares their wavenumbers' bins, with an amplitude 1-2 % of theirs.
+  r.rib_depth = 10;
+  const SurfaceProfile p(r, 8);
+  const double k0 = p.rib_wavenumber();
+  ASSERT_NEAR(1 / k0, r.ribs, 1e-3 * r.ribs);  // whole ribs in the loop: within 0.1 %
+  const int n = 32768;                         // 1.5 Hz bins: each line clear of the next and of DC
+  const double df = kContactFs / n;
+  for (const float v : {0.25f, 0.5f}) {
+    const std::vector<double> psd = contact_psd(contact_force(p, 1, v, 0, 1 << 18), n);
+    // The fundamental at v k0: a line whose power, summed over its bins, is the sinusoid's
+    // mean square (level N g A1)^2 / 2, far above the fractal beside it.
+    const double f0 = v * k0;
+    const std::size_t bin = std::size_t(std::llround(f0 / df));
+    // A line's power: its 7 bins, less the fractal beside it (bins 8 to 16 away, either side).
+    auto line_power = [&](std::size_t b) {
+      double in = 0, beside = 0;
+      for (std::size_t k = b - 3; k <= b + 3; ++k) in += psd[k];
+      for (std::size_t d = 8; d <= 16; ++d) beside += psd[b - d] + psd[b + d];
+      return (in - 7 * beside / 18) * df;
+    };
+    const double line = line_power(bin);
+    const double gate = v * v / (v * v + kSlipGate * kSlipGate);
+    const double a1 = r.level * gate * p.rib_amplitude(1);
+    EXPECT_NEAR(contact_db(line / (a1 * a1 / 2)), 0.0, 0.5) << v;
+    EXPECT_GT(psd[bin], 100 * psd[bin + 12]) << v;  // a line, not a band
+    // The second harmonic, a quarter of the fundamental's amplitude.
+    const double second = line_power(2 * bin);
+    EXPECT_NEAR(contact_db(second / line), contact_db(1.0 / 16), 1.0) << v;
+  }
+}
+
 namespace {
 
 // Two modes on two surface points: mode 0 has a node at point 0, mode 1 moves at both.
@@ -308,7 +342,8 @@ Scene contact_scene(const std::string& extra = "") {
                  [0.35, 0.05, 0.005]],
        "other_point": [0.12, 0.015, 0.005], "roughness": {"surface": "steel", "level": 0.08}},
       {"time": 0.4, "type": "contact", "object": "rod", "duration": 0.5, "force": 1,
-       "rolling": 0.3, "point": [0.1, 0.015, 0.005], "roughness": {"surface": "glass"}},
+       "rolling": 0.3, "point": [0.1, 0.015, 0.005],
+       "roughness": {"surface": "glass", "ribs": 0.004, "rib_depth": 1}},
       {"time": 0.0, "type": "shake", "object": "plate", "instrument": "gravel", "energy": 0.3},
       {"time": 0.7, "type": "impact", "object": "rod", "impulse": 0.002})" +
                                            extra + "]}"),
@@ -328,6 +363,8 @@ TEST(ContactScene, ParsesTrajectoriesAndNamesEachProblem) {
   EXPECT_EQ(a.roughness.surface, "steel");
   EXPECT_EQ(*a.roughness.level, 0.08);
   EXPECT_EQ(s.contacts[1].samples, 51u);  // 0.5 s at 100 per second, both ends
+  EXPECT_EQ(*s.contacts[1].roughness.ribs, 0.004);
+  EXPECT_EQ(*s.contacts[1].roughness.rib_depth, 1.0);
   auto error = [](const std::string& event) {
     try {
       contact_scene("," + event);
@@ -374,6 +411,8 @@ TEST(ContactScene, RefusesPointsOffTheSurfaceAndUnknownSurfaces) {
             "ceramic, wood, stone, plastic)");
   EXPECT_EQ(error(head + R"("roughness": {"longest": 2}})"),
             "$.events[4].roughness: roughness: longest must lie in (shortest, 1] m");
+  EXPECT_EQ(error(head + R"("roughness": {"ribs": 0.5, "rib_depth": 1}})"),
+            "$.events[4].roughness: roughness: ribs must be 0 or lie in [2 shortest, 0.1] m");
 }
 
 TEST(ContactScene, CpuAndGpuFilterbanksAgree) {

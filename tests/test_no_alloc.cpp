@@ -238,6 +238,7 @@ TEST(CApi, RenderingDoesNotAllocateWhileContactsSlideAndRingDown) {
   chladni_config c;
   chladni_config_default(&c);
   c.threads = 1;
+  c.contact_slots = 4096;
   c.max_contacts = 1;  // so that adding another shows the first one's place came back
   chladni_runtime* rt = nullptr;
   ASSERT_EQ(chladni_runtime_create(&c, &rt), CHLADNI_OK) << chladni_last_error();

@@ -64,17 +64,12 @@ std::vector<Vec3> points(Obj& o, const std::string& key) {
 
 void parse_roughness(Obj o, RoughnessSpec& r) {
   if (o.has("surface")) r.surface = o.string("surface");
-  for (const char* key : {"level", "height", "beta", "shortest", "longest", "patch"}) {
-    if (!o.has(key)) continue;
-    const double x = o.non_negative(key, 0);
-    const std::string k = key;
-    (k == "level"      ? r.level
-     : k == "height"   ? r.height
-     : k == "beta"     ? r.beta
-     : k == "shortest" ? r.shortest
-     : k == "longest"  ? r.longest
-                       : r.patch) = x;
-  }
+  const std::pair<const char*, std::optional<double>*> fields[] = {
+      {"level", &r.level},       {"height", &r.height},      {"beta", &r.beta},
+      {"shortest", &r.shortest}, {"longest", &r.longest},    {"patch", &r.patch},
+      {"ribs", &r.ribs},         {"rib_depth", &r.rib_depth}};
+  for (const auto& [key, field] : fields)
+    if (o.has(key)) *field = o.non_negative(key, 0);
   o.done();
 }
 

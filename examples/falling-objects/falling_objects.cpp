@@ -346,6 +346,7 @@ Run simulate(const Options& opt, int muted, FILE* log) {
   chladni_config config;
   chladni_config_default(&config);
   config.threads = 1;
+  config.contact_slots = 4096;  // every body's contact: its modes
   chladni_runtime* rt = nullptr;
   check(chladni_runtime_create(&config, &rt), "create");
   const double fwd[3] = {0, 1, 0}, up[3] = {0, 0, 1}, ear[3] = {0, -1.2, 0.3};

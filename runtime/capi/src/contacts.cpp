@@ -108,6 +108,10 @@ chladni_status chladni_contact_add(chladni_runtime* rt, const chladni_contact_de
     RoughnessSpec spec;
     if (desc->surface) spec.surface = desc->surface;
     if (desc->level > 0) spec.level = desc->level;
+    if (!(desc->ribs >= 0 && desc->rib_depth >= 0))  // NaN too
+      throw InputError("ribs and rib_depth must be >= 0");
+    if (desc->ribs > 0) spec.ribs = desc->ribs;
+    if (desc->rib_depth > 0) spec.rib_depth = desc->rib_depth;
     const Roughness roughness = resolve_roughness(spec);
     if (rt->free_contact_places.empty()) {
       capi::fail(CHLADNI_QUEUE_FULL, "chladni_contact_add: max_contacts (" +

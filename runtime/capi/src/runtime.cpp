@@ -321,7 +321,7 @@ void chladni_config_default(chladni_config* c) {
                         60.0,
                         nullptr,
                         4,
-                        16384,
+                        0,
                         64};
 }
 

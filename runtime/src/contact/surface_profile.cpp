@@ -61,6 +61,10 @@ void validate_roughness(const Roughness& r) {
         "longest must lie in (shortest, 1] m");
   check(r.longest / r.shortest <= 4096, "longest / shortest must be <= 4096");
   check(std::isfinite(r.patch) && r.patch > 0 && r.patch <= 0.1, "patch must lie in (0, 0.1] m");
+  check(std::isfinite(r.ribs) && (r.ribs == 0 || (r.ribs >= 2 * r.shortest && r.ribs <= 0.1)),
+        "ribs must be 0 or lie in [2 shortest, 0.1] m");
+  check(std::isfinite(r.rib_depth) && r.rib_depth >= 0 && r.rib_depth <= 100,
+        "rib_depth must lie in [0, 100]");
 }
 
 SurfaceProfile::SurfaceProfile(const Roughness& r, uint64_t seed) : r_(r) {
@@ -87,6 +91,17 @@ SurfaceProfile::SurfaceProfile(const Roughness& r, uint64_t seed) : r_(r) {
   Rng rng(seed ^ 0x70f11e5eedull);
   std::vector<double> phase(last + 1);
   for (std::size_t m = first; m <= last; ++m) phase[m] = 2 * std::numbers::pi * rng.uniform();
+  // The ribs: harmonics h of bin m0 (whole ribs in the loop), amplitude a / h^2, their rms
+  // sqrt(sum (a/h^2)^2 / 2) = rib_depth.
+  std::size_t rib_bin = 0, rib_harmonics = 0;
+  if (r.ribs > 0 && r.rib_depth > 0) {
+    rib_bin = std::max<std::size_t>(1, std::size_t(std::llround(length_ / r.ribs)));
+    rib_harmonics = std::max<std::size_t>(1, last / rib_bin);
+    double sum4 = 0;
+    for (std::size_t h = 1; h <= rib_harmonics; ++h) sum4 += std::pow(double(h), -4);
+    rib_k_ = double(rib_bin) * dk;
+    rib_a_ = r.rib_depth * std::sqrt(2 / sum4);
+  }
   RealFft fft(n_, true);
   for (int j = 0; j < levels_; ++j) {
     const double k_max = k_top_ / std::ldexp(1.0, j);
@@ -98,6 +113,14 @@ SurfaceProfile::SurfaceProfile(const Roughness& r, uint64_t seed) : r_(r) {
         double a = std::sqrt(2 * c_ * std::pow(k, -r.beta) * dk) / 2;
         if (which == 1) a *= -std::pow(2 * std::numbers::pi * k, 2) * patch_response(k);
         fft.spec[m] = {float(a * std::cos(phase[m])), float(a * std::sin(phase[m]))};
+      }
+      for (std::size_t h = 1; h <= rib_harmonics; ++h) {
+        const std::size_t m = h * rib_bin;
+        const double k = double(m) * dk;
+        if (k > k_max * (1 + 1e-12) || m >= n_ / 2) break;
+        double a = rib_amplitude(int(h)) / 2;  // a cosine of amplitude A: bin m holds A / 2
+        if (which == 1) a *= -std::pow(2 * std::numbers::pi * k, 2) * patch_response(k);
+        fft.spec[m].r += float(a);
       }
       fft.execute();
       float* row = (which == 0 ? height_ : curvature_).data() + (n_ + 1) * j;

@@ -63,6 +63,8 @@ Roughness resolve_roughness(const RoughnessSpec& s) {
   if (s.shortest) r.shortest = *s.shortest;
   if (s.longest) r.longest = *s.longest;
   if (s.patch) r.patch = *s.patch;
+  if (s.ribs) r.ribs = *s.ribs;
+  if (s.rib_depth) r.rib_depth = *s.rib_depth;
   validate_roughness(r);
   return r;
 }

@@ -93,7 +93,7 @@ struct ShakeEvent {
 /// any fields overriding it.
 struct RoughnessSpec {
   std::string surface = "steel";
-  std::optional<double> level, height, beta, shortest, longest, patch;
+  std::optional<double> level, height, beta, shortest, longest, patch, ribs, rib_depth;
 };
 
 /// A continuous contact (sliding, rolling) on an object, optionally pressed against a second

@@ -94,9 +94,11 @@ typedef struct chladni_config {
   const chladni_vulkan_device* vulkan; /* NULL: the GPU backend opens a device of its own; else
                                           GPU and AUTO run on this one (copied at creation) */
   uint32_t max_papers;                 /* 4: paper sheets alive or ringing out at once (0: none) */
-  uint32_t contact_slots;              /* 16384: modes of all continuous contacts together (each
-                                          contact takes its bodies' modes; 0: no contacts) */
-  uint32_t max_contacts;               /* 64: contacts alive or ringing down at once */
+  uint32_t contact_slots; /* 0 (none): modes of all continuous contacts together (each contact
+                             takes its bodies' modes). The filterbank runs every slot below the
+                             highest in use, so these cost each block, used or not (as
+                             shaker_slots do): ask for what the game needs */
+  uint32_t max_contacts;  /* 64: contacts alive or ringing down at once */
 } chladni_config;
 
 typedef struct chladni_runtime chladni_runtime;
@@ -230,6 +232,8 @@ typedef struct chladni_contact_desc {
   double level;          /* sliding force fluctuation per newton of normal force; 0: the
                             surface's own */
   uint64_t seed;         /* 0: 1 */
+  double ribs;           /* a ribbed texture's spacing (m, up to 0.1); 0: none */
+  double rib_depth;      /* its rms beside the surface's own roughness (0 to 100) */
 } chladni_contact_desc;
 typedef struct chladni_contact_state {
   double time;           /* s on the runtime's clock at which these values hold */
