@@ -21,7 +21,7 @@ ContactBank::ContactBank(Filterbank& fb, const ContactBankOptions& o) : fb_(fb),
   retired_.reserve(o.max_contacts);
   // Each live contact splits at most one run in two.
   free_runs_.reserve(std::size_t{o.max_contacts} + 2);
-  if (lease_.size() > 0) free_runs_.push_back({lease_.begin, lease_.size()});
+  free_runs_.give(lease_.begin, lease_.size());
   force_.assign(fb.max_frames(), 0.0f);
   slip_.assign(fb.max_frames(), 0.0f);
   roll_.assign(fb.max_frames(), 0.0f);
@@ -68,8 +68,8 @@ std::unique_ptr<ContactBank::Prepared> ContactBank::prepare(const ContactSpec& s
 
 bool ContactBank::install(Prepared& p, uint32_t index) noexcept {
   if (index >= contacts_.size() || contacts_[index].live || p.contact.slots == 0) return false;
-  const uint32_t first = take_slots(p.contact.slots);
-  if (first == UINT32_MAX) return false;
+  const uint32_t first = free_runs_.take(p.contact.slots);
+  if (first == ~0u) return false;
   std::swap(contacts_[index], p.contact);
   Contact& c = contacts_[index];
   c.live = true;
@@ -122,38 +122,11 @@ bool ContactBank::retire(Contact& c, uint32_t index, uint64_t now) {
   }
   if (now < c.free_at) return false;
   for (uint32_t s = c.first_slot; s < c.first_slot + c.slots; ++s) fb_.clear_mode(s);
-  give_slots(c.first_slot, c.slots);
+  free_runs_.give(c.first_slot, c.slots);
   c.live = c.fading = false;
   c.retire_at = UINT64_MAX;
   if (retired_.size() < retired_.capacity()) retired_.push_back(index);
   return true;
-}
-
-uint32_t ContactBank::take_slots(uint32_t count) noexcept {
-  for (std::size_t r = 0; r < free_runs_.size(); ++r) {
-    auto& [first, n] = free_runs_[r];
-    if (n < count) continue;
-    const uint32_t at = first;
-    first += count;
-    n -= count;
-    if (n == 0) free_runs_.erase(free_runs_.begin() + std::ptrdiff_t(r));
-    return at;
-  }
-  return UINT32_MAX;
-}
-
-void ContactBank::give_slots(uint32_t first, uint32_t count) noexcept {
-  if (count == 0) return;
-  auto it = std::lower_bound(free_runs_.begin(), free_runs_.end(), std::make_pair(first, 0u));
-  it = free_runs_.insert(it, {first, count});  // within the reserved capacity
-  if (it + 1 != free_runs_.end() && it->first + it->second == (it + 1)->first) {
-    it->second += (it + 1)->second;
-    free_runs_.erase(it + 1);
-  }
-  if (it != free_runs_.begin() && (it - 1)->first + (it - 1)->second == it->first) {
-    (it - 1)->second += it->second;
-    free_runs_.erase(it);
-  }
 }
 
 }  // namespace chladni::runtime

@@ -139,8 +139,7 @@ int ShakerBank::add_voice(const ShakerVoice& sv) {
   if (index >= opt_.max_voices)
     throw InputError("shaker bank is full (" + std::to_string(opt_.max_voices) + " voices)");
   if (!add_voice(*p, index)) {
-    uint32_t room = lease_.end - slot_end_;
-    for (const auto& run : free_runs_) room = std::max(room, run.second);
+    const uint32_t room = std::max(lease_.end - slot_end_, free_runs_.largest());
     throw InputError("voice '" + sv.name + "' needs " + std::to_string(sv.resonances.size()) +
                      " filterbank slots; only " + std::to_string(room) + " are left");
   }

@@ -60,15 +60,7 @@ std::unique_ptr<ShakerBank::PreparedVoice> ShakerBank::prepare_voice(const Shake
 // `count` consecutive slots: the first freed run that holds them, else the lease's untouched
 // end; ~0u when neither does.
 uint32_t ShakerBank::take_slots(uint32_t count) noexcept {
-  for (std::size_t k = 0; k < free_runs_.size(); ++k) {
-    auto& [first, n] = free_runs_[k];
-    if (n < count) continue;
-    const uint32_t at = first;
-    first += count;
-    n -= count;
-    if (n == 0) free_runs_.erase(free_runs_.begin() + std::ptrdiff_t(k));
-    return at;
-  }
+  if (const uint32_t at = free_runs_.take(count); at != ~0u) return at;
   if (uint64_t{slot_end_} + count > lease_.end) return ~0u;
   const uint32_t at = slot_end_;
   slot_end_ += count;
@@ -79,19 +71,7 @@ uint32_t ShakerBank::take_slots(uint32_t count) noexcept {
 // Returns a run, merged with its neighbours (at most one run per removed voice: the reserved
 // capacity holds them all).
 void ShakerBank::give_slots(uint32_t first, uint32_t count) noexcept {
-  auto it = std::lower_bound(free_runs_.begin(), free_runs_.end(), std::pair(first, 0u));
-  it = free_runs_.insert(it, {first, count});
-  if (auto next = it + 1; next != free_runs_.end() && it->first + it->second == next->first) {
-    it->second += next->second;
-    free_runs_.erase(next);
-  }
-  if (it != free_runs_.begin()) {
-    auto prev = it - 1;
-    if (prev->first + prev->second == it->first) {
-      prev->second += it->second;
-      free_runs_.erase(it);
-    }
-  }
+  free_runs_.give(first, count);
 }
 
 bool ShakerBank::add_voice(PreparedVoice& p, uint32_t index) {

@@ -34,6 +34,7 @@
 
 #include "chladni/runtime/contact/contact_excitation.hpp"
 #include "chladni/runtime/filterbank/filterbank.hpp"
+#include "chladni/runtime/filterbank/slot_runs.hpp"
 #include "chladni/runtime/modal/object_modes.hpp"
 
 namespace chladni::runtime {
@@ -146,16 +147,13 @@ class ContactBank {
   void drive_gains(Contact& c, uint32_t stream, const ContactPoint& p);
   void fill(Contact& c, uint64_t now, uint32_t frames);
   bool retire(Contact& c, uint32_t index, uint64_t now);
-  uint32_t take_slots(uint32_t count) noexcept;
-  void give_slots(uint32_t first, uint32_t count) noexcept;
 
   Filterbank& fb_;
   ContactBankOptions opt_;
   SlotLease lease_;
   uint32_t slot_end_ = 0;  // slots [lease_.begin, +slot_end_) have been used
   uint32_t count_ = 0;
-  // Runs of free slots (first, count), sorted and merged; capacity fixed.
-  std::vector<std::pair<uint32_t, uint32_t>> free_runs_;
+  SlotRuns free_runs_;
   std::vector<Contact> contacts_;  // max_contacts places
   std::vector<uint32_t> retired_;
   std::vector<float> force_, slip_, roll_;  // scratch, max_frames each

@@ -20,6 +20,7 @@
 
 #include "chladni/core/audio_file.hpp"
 #include "chladni/runtime/filterbank/filterbank.hpp"
+#include "chladni/runtime/filterbank/slot_runs.hpp"
 #include "chladni/runtime/phisem/phisem.hpp"
 #include "chladni/runtime/thread_pool.hpp"
 
@@ -139,7 +140,7 @@ class ShakerBank {
   SlotLease lease_;
   uint32_t slot_end_ = 0;
   // Runs of slots freed by removed voices (first, count), sorted and merged.
-  std::vector<std::pair<uint32_t, uint32_t>> free_runs_;
+  SlotRuns free_runs_;
   std::vector<Voice> voices_;
   std::vector<PhisemParams> params_;
   std::vector<PhisemState> states_;  // CPU backend
