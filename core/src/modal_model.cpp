@@ -1,4 +1,5 @@
 #include "chladni/core/modal_model.hpp"
+#include <algorithm>
 
 #include <cmath>
 #include <limits>
@@ -21,6 +22,13 @@ std::size_t ModalModel::nearest_point(const Vec3& p) const {
     if (d2 < best_d2) best_d2 = d2, best = v;
   }
   return best;
+}
+
+std::pair<Vec3, Vec3> ModalModel::surface_box() const {
+  Vec3 lo = points.at(0), hi = points.at(0);
+  for (const Vec3& p : points)
+    for (int c = 0; c < 3; ++c) lo[c] = std::min(lo[c], p[c]), hi[c] = std::max(hi[c], p[c]);
+  return {lo, hi};
 }
 
 void ModalModel::validate() const {

@@ -193,13 +193,8 @@ chladni_status chladni_bank_bounds(const chladni_runtime* rt, chladni_bank h, do
     const Bank& b = rt->bank(h);
     if (!b.model || b.model->points.empty())
       throw InputError("the bank has no surface points (inline modes)");
-    for (int c = 0; c < 3; ++c) lo[c] = hi[c] = b.model->points[0][c];
-    for (const Vec3& p : b.model->points) {
-      for (int c = 0; c < 3; ++c) {
-        lo[c] = std::min(lo[c], p[c]);
-        hi[c] = std::max(hi[c], p[c]);
-      }
-    }
+    const auto [l, h] = b.model->surface_box();
+    for (int c = 0; c < 3; ++c) lo[c] = l[c], hi[c] = h[c];
     return CHLADNI_OK;
   });
 }

@@ -28,11 +28,8 @@ uint32_t live_contact(const chladni_runtime* rt, chladni_contact contact) {
 void body_box(const capi::Bank& b, std::atomic<double>* out) {
   double box[6] = {-INFINITY, -INFINITY, -INFINITY, INFINITY, INFINITY, INFINITY};
   if (b.model && b.model->has_geometry()) {
-    std::fill(box, box + 3, INFINITY);
-    std::fill(box + 3, box + 6, -INFINITY);
-    for (const Vec3& p : b.model->points)
-      for (int k = 0; k < 3; ++k)
-        box[k] = std::min(box[k], p[k]), box[3 + k] = std::max(box[3 + k], p[k]);
+    const auto [lo, hi] = b.model->surface_box();
+    for (int k = 0; k < 3; ++k) box[k] = lo[k], box[3 + k] = hi[k];
     double d2 = 0;
     for (int k = 0; k < 3; ++k) d2 += (box[3 + k] - box[k]) * (box[3 + k] - box[k]);
     const double grow = kOffBox * std::sqrt(d2);

@@ -31,10 +31,6 @@ std::complex<float> drive(const ObjectModes& o, std::size_t i, std::size_t verte
   return {wd > 0 ? static_cast<float>(per_ns / (fs * wd * wd)) : 0.0f, 0.0f};
 }
 
-std::size_t points(const ObjectModes& o) {
-  return o.model && o.model->has_geometry() ? o.model->points.size() : 0;
-}
-
 }  // namespace
 
 bool ContactBank::push(int k, const ContactPoint& p) {
@@ -44,10 +40,10 @@ bool ContactBank::push(int k, const ContactPoint& p) {
   if (c.size > 0 && p.sample < at(c, c.size - 1).sample) return false;
   if (!valid(p.force) || !valid(p.slip) || !valid(p.rolling)) return false;
   for (int b = 0; b < c.body_count; ++b) {
-    const std::size_t n = points(c.bodies[b].modes);
+    const std::size_t n = surface_points(c.bodies[b].modes);
     if (n > 0 && p.vertex[b] >= n) return false;
   }
-  if (!c.started && c.size == 0) c.begin = p.sample;
+  if (c.size == 0) c.begin = p.sample;  // the first: the ring keeps one from then on
   c.ring[(c.head + c.size) % c.ring.size()] = p;
   ++c.size;
   return true;
@@ -85,7 +81,7 @@ uint64_t ContactBank::silent_from() const {
 void ContactBank::drive_gains(Contact& c, uint32_t stream, const ContactPoint& p) {
   for (int b = 0; b < c.body_count; ++b) {
     Body& body = c.bodies[b];
-    const int64_t v = points(body.modes) > 0 ? int64_t(p.vertex[b]) : 0;
+    const int64_t v = surface_points(body.modes) > 0 ? int64_t(p.vertex[b]) : 0;
     if (v == body.vertex) continue;
     body.vertex = v;
     for (uint32_t i = 0; i < body.count; ++i)
@@ -141,7 +137,6 @@ void ContactBank::render(uint64_t now, uint32_t frames, float* rows) {
       c.f1 = c.f2 = 0;
       continue;
     }
-    c.started = true;
     drive_gains(c, stream, at(c, 0));
     fill(c, now, frames);
     c.excitation->process(force_.data(), slip_.data(), roll_.data(), frames, c.force.data());

@@ -16,9 +16,9 @@ void ContactExcitation::process(const float* force, const float* slip, const flo
     double f = 0;
     if (vs != 0) {
       const double gate = vs * vs / (vs * vs + kSlipGate * kSlipGate);
-      f += r.level * N * gate * profile_->read(s_slide_, vs, nyquist).height;
+      f += r.level * N * gate * profile_->height(s_slide_, vs, nyquist);
     }
-    if (vr != 0) f += N * roll_scale * vr * vr * profile_->read(s_roll_, vr, nyquist).curvature;
+    if (vr != 0) f += N * roll_scale * vr * vr * profile_->curvature(s_roll_, vr, nyquist);
     out[n] = static_cast<float>(f);
     s_slide_ += vs * dt;
     s_roll_ += vr * dt;

@@ -140,7 +140,8 @@ double SurfaceProfile::patch_response(double k) const {
   return std::exp(-0.5 * x * x);
 }
 
-SurfaceProfile::Read SurfaceProfile::read(double s, double speed, double nyquist) const {
+float SurfaceProfile::read(const std::vector<float>& table, double s, double speed,
+                           double nyquist) const {
   // Level u keeps wavenumbers up to k_top / 2^u; the pair (floor u, floor u + 1) below Nyquist
   // at this speed, blended so the band moves smoothly with it.
   const double over = std::abs(speed) * k_top_ / (0.5 * nyquist);
@@ -151,13 +152,12 @@ SurfaceProfile::Read SurfaceProfile::read(double s, double speed, double nyquist
   x -= std::floor(x / double(n_)) * double(n_);
   std::size_t i = std::min(std::size_t(x), n_ - 1);
   const float f = float(x - double(i));
-  auto at = [&](const std::vector<float>& t, int level) {
+  auto at = [&](int level) {
     if (level >= levels_) return 0.0f;
-    const float* row = t.data() + (n_ + 1) * level;
+    const float* row = table.data() + (n_ + 1) * level;
     return row[i] + f * (row[i + 1] - row[i]);
   };
-  return {(1 - w) * at(height_, j) + w * at(height_, j + 1),
-          (1 - w) * at(curvature_, j) + w * at(curvature_, j + 1)};
+  return (1 - w) * at(j) + w * at(j + 1);
 }
 
 }  // namespace chladni::runtime

@@ -16,9 +16,7 @@ namespace {
 constexpr double kOffSurface = 0.1;
 
 double diagonal(const ModalModel& m) {
-  Vec3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-  for (const Vec3& p : m.points)
-    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], p[k]), hi[k] = std::max(hi[k], p[k]);
+  const auto [lo, hi] = m.surface_box();
   const Vec3 d = sub(hi, lo);
   return std::sqrt(dot(d, d));
 }

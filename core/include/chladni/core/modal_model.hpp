@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "chladni/core/damping.hpp"
@@ -45,6 +46,8 @@ struct ModalModel {
   double damped_omega(std::size_t mode) const;
   /// Index of the surface point nearest to p. Requires geometry.
   std::size_t nearest_point(const Vec3& p) const;
+  /// The axis-aligned box of the surface points (lo, hi). Requires geometry.
+  std::pair<Vec3, Vec3> surface_box() const;
   /// Throws InputError naming the first inconsistent count or non-finite value.
   void validate() const;
 };

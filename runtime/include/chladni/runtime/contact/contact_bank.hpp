@@ -136,7 +136,6 @@ class ContactBank {
     std::unique_ptr<ContactExcitation> excitation;
     std::vector<ContactPoint> ring;  // capacity max_points
     std::size_t head = 0, size = 0;
-    bool started = false;
     uint64_t begin = 0, end = UINT64_MAX;
     std::vector<float> force;  // the last block's, max_frames
     float f1 = 0, f2 = 0;      // the force one and two samples before the block

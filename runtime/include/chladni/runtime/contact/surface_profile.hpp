@@ -51,13 +51,15 @@ class SurfaceProfile {
   /// Builds the tables (allocates about 2 MB; a control thread). `seed` draws the phases.
   explicit SurfaceProfile(const Roughness& roughness, uint64_t seed = 1);
 
-  struct Read {
-    float height;     ///< unit-rms profile at s
-    float curvature;  ///< d^2/ds^2 of the patch-smoothed unit-rms profile (1/m^2)
-  };
-  /// The profile at position `s` (m, any value: the table loops) with only the wavenumbers that
-  /// a speed of `speed` m/s keeps below `nyquist` Hz. Allocates nothing.
-  Read read(double s, double speed, double nyquist) const;
+  /// The unit-rms profile at position `s` (m, any value: the table loops) with only the
+  /// wavenumbers that a speed of `speed` m/s keeps below `nyquist` Hz. Allocates nothing.
+  float height(double s, double speed, double nyquist) const {
+    return read(height_, s, speed, nyquist);
+  }
+  /// Likewise, d^2/ds^2 of the patch-smoothed unit-rms profile (1/m^2).
+  float curvature(double s, double speed, double nyquist) const {
+    return read(curvature_, s, speed, nyquist);
+  }
 
   /// One-sided power spectral density of the unit-rms height per cycle/m at wavenumber k.
   double psd(double k) const;
@@ -77,6 +79,7 @@ class SurfaceProfile {
   double rib_k_ = 0, rib_a_ = 0;
   int levels_ = 0;
   std::vector<float> height_, curvature_;  // level-major, n_ + 1 each (the first repeated)
+  float read(const std::vector<float>& table, double s, double speed, double nyquist) const;
 };
 
 }  // namespace chladni::runtime

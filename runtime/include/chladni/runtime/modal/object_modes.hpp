@@ -21,6 +21,11 @@ struct ObjectModes {
   const Transfer* transfer = nullptr;
 };
 
+/// Surface points an impact or a contact may name (0 without geometry).
+inline std::size_t surface_points(const ObjectModes& o) {
+  return o.model && o.model->has_geometry() ? o.model->points.size() : 0;
+}
+
 /// Builds the voice description of a modal model: gain_i = radiation_i * omega_d^2 (pressure from
 /// modal acceleration at 1 m).
 ObjectModes object_modes(const ModalModel& model);

@@ -174,10 +174,7 @@ class ScenePlayer {
   std::size_t mode_count(std::size_t object) const { return objects_.at(object).gains.size(); }
   const ObjectModes& modes(std::size_t object) const { return objects_.at(object).modes; }
   /// Surface points an impact may name by vertex (0 without geometry).
-  std::size_t points(std::size_t object) const {
-    const ObjectModes& m = objects_.at(object).modes;
-    return m.model && m.model->has_geometry() ? m.model->points.size() : 0;
-  }
+  std::size_t points(std::size_t object) const { return surface_points(objects_.at(object).modes); }
   uint64_t gain_updates() const { return gain_updates_; }
   double gain_seconds() const { return gain_seconds_; }
   /// "cpu", "gpu" or "" when no object has transfer.
